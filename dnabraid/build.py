@@ -1,0 +1,197 @@
+"""Scene + force field -> OpenMM (Topology, System, positions), with only the terms needed.
+
+Particle layout (``Model.chains``): each strand is an ordered chain of beads from the
+surface tether (index 0 of the chain, immobile) to the bead attachment point (last
+index of the chain). In the braid the two attachment points are joined by a rigid link
+of length ``tether_separation_nm``: together they are the magnetic bead, pulled by the
+force and held by the rotational trap. No bead-DNA excluded volume is modelled (the
+bead is large and sits above the DNA under tension); no twist term (nicked DNA).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import numpy as np
+import openmm
+import openmm.app as app
+
+from . import forcefield, units
+from .forces import (bending_force, pull_force, stretch_force, trap_force, wall_force,
+                     wca_exclusions, wca_force)
+from .scene import Scene
+
+#: Force groups, one per physical term, so blow-ups and benchmarks can name the term.
+GROUPS = {"stretch": 0, "bend": 1, "wca": 2, "wall": 3, "pull": 4, "trap": 5, "link": 6,
+          "chiral": 7}
+
+
+@dataclasses.dataclass
+class Model:
+    """A built scene: OpenMM objects plus the bookkeeping the engine and analysis need.
+
+    Attributes
+    ----------
+    scene : Scene
+    system : openmm.System
+    topology : openmm.app.Topology
+    positions : ndarray (N, 3), nm
+    chains : list of int arrays (one per strand, surface -> bead)
+    attachments : list of int (bead attachment particles)
+    fixed : list of int (immobile tether particles)
+    bonds : ndarray (n, 2) along the strands
+    params : dict of derived numbers (kappa, k_bond, frictions, diameter, ...)
+    forces : dict name -> force group of the terms actually present
+    """
+
+    scene: Scene
+    system: openmm.System
+    topology: app.Topology
+    positions: np.ndarray
+    chains: list
+    attachments: list
+    fixed: list
+    bonds: np.ndarray
+    params: dict
+    forces: dict
+
+
+def build(scene: Scene) -> Model:
+    """Build the OpenMM model of ``scene`` (see module docstring for the layout)."""
+    kT = scene.kT
+    b = scene.bead_spacing_nm
+    n = scene.n_beads
+    d = scene.effective_diameter_nm
+    kappa_kT = forcefield.bending_stiffness_kT(b, scene.persistence_nm)
+    kappa = kappa_kT * kT
+    k_bond = scene.stretch_modulus_pN / b
+    zeta_dna = units.stokes_friction(
+        forcefield.mechanics()["hydrodynamic_radius_fraction"] * b)
+    zeta_bead_phys = units.stokes_friction(scene.bead_radius_nm)
+
+    system = openmm.System()
+    topology = app.Topology()
+    positions = []
+    chains = []
+    n_str = scene.n_strands
+    xs = [0.0] if n_str == 1 else [-0.5 * scene.tether_separation_nm,
+                                   0.5 * scene.tether_separation_nm]
+    zeta_attach = max(zeta_dna, scene.bead_friction_factor * zeta_bead_phys / n_str)
+    for s in range(n_str):
+        chain = topology.addChain(id="AB"[s])
+        idx = []
+        for i in range(n):
+            res = topology.addResidue("DNA", chain)
+            topology.addAtom("C", app.element.carbon, res)
+            if i == 0:
+                mass = 0.0  # tethered to the surface: immobile
+            elif i == n - 1:
+                mass = units.friction_to_mass_amu(zeta_attach)
+            else:
+                mass = units.friction_to_mass_amu(zeta_dna)
+            idx.append(system.addParticle(mass))
+            positions.append((xs[s], 0.0, i * b))
+        chains.append(np.array(idx))
+    positions = np.array(positions, float)
+    attachments = [int(c[-1]) for c in chains]
+    fixed = [int(c[0]) for c in chains]
+    bonds = np.array([(c[i], c[i + 1]) for c in chains for i in range(len(c) - 1)], int)
+    triplets = np.array([(c[i], c[i + 1], c[i + 2]) for c in chains for i in range(len(c) - 2)],
+                        int)
+    present = {}
+
+    def add(force, name):
+        force.setForceGroup(GROUPS[name])
+        system.addForce(force)
+        present[name] = GROUPS[name]
+
+    # stretching: harmonic bonds or rigid constraints
+    if scene.stretch == "bonds":
+        add(stretch_force(bonds, k_bond, b, name="stretch"), "stretch")
+    else:
+        for i, j in bonds:
+            system.addConstraint(int(i), int(j), b)
+    add(bending_force(triplets, kappa, name="bend"), "bend")
+    excl_extra = []
+    if n_str == 2:
+        excl_extra = [tuple(attachments), tuple(fixed)]
+    exclusions = wca_exclusions(chains, b, d, extra_pairs=excl_extra)
+    add(wca_force(system.getNumParticles(), d, kT, exclusions=exclusions, name="wca"), "wca")
+    mobile = [int(i) for c in chains for i in c[1:]]
+    wall_k = 456.0 * kT / d**2  # = U''_WCA(sigma): as stiff as bead contact
+    if scene.surface:
+        add(wall_force(mobile, 0.5 * d, wall_k, name="wall"), "wall")
+    add(pull_force(attachments, [1.0 / n_str] * n_str, scene.force_pN, name="pull"), "pull")
+    link_k = k_bond
+    if n_str == 2:
+        trap_r = 0.5 * scene.tether_separation_nm
+        tilt_k = scene.trap_stiffness_pN_nm / trap_r**2
+        add(trap_force(attachments[0], attachments[1], scene.trap_stiffness_pN_nm, 0.0,
+                       tilt_k, name="trap"), "trap")
+        if scene.stretch == "bonds":
+            add(stretch_force([attachments], link_k, scene.tether_separation_nm, name="link"),
+                "link")
+        else:
+            system.addConstraint(attachments[0], attachments[1], scene.tether_separation_nm)
+    params = {
+        "kT_pN_nm": kT,
+        "kappa_kT": kappa_kT,
+        "kappa_pN_nm": kappa,
+        "k_bond_pN_per_nm": k_bond,
+        "diameter_nm": d,
+        "zeta_dna_pN_ns_per_nm": zeta_dna,
+        "zeta_attach_pN_ns_per_nm": zeta_attach,
+        "zeta_bead_physical_pN_ns_per_nm": zeta_bead_phys,
+        "wall_k_pN_per_nm": wall_k if scene.surface else 0.0,
+        "n_exclusions": len(exclusions),
+    }
+    params.update(stiffest_mode(scene, params))
+    return Model(scene, system, topology, positions, chains, attachments, fixed, bonds,
+                 params, present)
+
+
+def stiffest_mode(scene: Scene, p: dict) -> dict:
+    """Largest relaxation rate (1/ns) of the force field, term by term, and the time step.
+
+    Euler-Maruyama (OpenMM's BrownianIntegrator) is stable for dt < 2 / (mu lambda_max)
+    with mu the mobility and lambda_max the largest eigenvalue of the Hessian. Bounds per
+    term for a bead chain: bonds 4 k (chain Laplacian), bending 16 kappa / b^2 (second
+    difference squared), WCA contact 2 U''(sigma) = 2 x 456 eps / sigma^2, the wall
+    U''; the trap K / r^2 and the link act on the bead. The rates of terms acting on the
+    same beads add. The time step is ``timestep_safety`` x 2 / rate_max.
+    """
+    kT = p["kT_pN_nm"]
+    b = scene.bead_spacing_nm
+    d = p["diameter_nm"]
+    mu = 1.0 / p["zeta_dna_pN_ns_per_nm"]
+    mu_a = 1.0 / p["zeta_attach_pN_ns_per_nm"]
+    rates = {
+        "stretch": (4.0 * p["k_bond_pN_per_nm"] * mu) if scene.stretch == "bonds" else 0.0,
+        "bend": 16.0 * p["kappa_pN_nm"] / b**2 * mu,
+        "wca": 2.0 * 456.0 * kT / d**2 * mu,
+        "wall": p["wall_k_pN_per_nm"] * mu,
+    }
+    if scene.n_strands == 2:
+        r = 0.5 * scene.tether_separation_nm
+        rates["trap"] = 2 * scene.trap_stiffness_pN_nm / r**2 * mu_a
+        rates["link"] = (2 * p["k_bond_pN_per_nm"] * mu_a) if scene.stretch == "bonds" else 0.0
+    total = rates["stretch"] + rates["bend"] + rates["wca"]
+    total = max(total, rates["wall"] + rates["stretch"], rates.get("trap", 0) + rates.get("link", 0))
+    stiff = max(rates, key=rates.get)
+    dt_ns = scene.timestep_safety * 2.0 / total
+    reason = (f"stiffest term '{stiff}' (rate {rates[stiff]:.3g}/ns); summed bound "
+              f"{total:.3g}/ns; dt = {scene.timestep_safety} x 2/rate = {dt_ns * 1e3:.4g} ps "
+              f"(Euler-Maruyama stability limit 2/rate = {2e3 / total:.4g} ps)")
+    return {"rates_per_ns": rates, "rate_max_per_ns": total, "stiffest_term": stiff,
+            "time_step_ns": dt_ns, "time_step_reason": reason}
+
+
+def scale_check(model: Model) -> None:
+    """Raise if the single-precision nonbonded arithmetic would lose accuracy."""
+    extent = float(np.max(np.abs(model.positions)))
+    if extent > 1e5 * model.scene.bead_spacing_nm:
+        raise ValueError(f"system extent {extent:.3g} nm is too large for single precision")
+
+
+__all__ = ["Model", "build", "GROUPS", "stiffest_mode", "math"]

@@ -1,0 +1,153 @@
+"""The ``dnabraid`` command.
+
+    dnabraid run [SCENE | SCENE.toml] [--set KEY=VALUE]... [--out DIR] [--platform NAME] [--seed N]
+    dnabraid scenes
+    dnabraid continuum ply|knot|overhand|tweezer [options] [--json]
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import json
+import logging
+import os
+import sys
+
+from . import scene as scn
+
+
+def _parse_sets(items) -> dict:
+    out = {}
+    for it in items or []:
+        if "=" not in it:
+            raise scn.SceneError(f"--set expects KEY=VALUE, got {it!r}")
+        k, v = it.split("=", 1)
+        out[k.strip()] = scn.parse_value(v)
+    return out
+
+
+def cmd_scenes(args) -> int:
+    defaults = scn.Scene()
+    for name in scn.BUILTIN:
+        print(f"{name}: {scn.SCENE_HELP[name]}")
+        base = dataclasses.replace(defaults, scene=name, **{
+            k: (tuple(v) if isinstance(v, list) else v) for k, v in scn.BUILTIN[name].items()})
+        for key in sorted(scn.allowed_keys(name)):
+            unit, help_ = scn.KEY_DOCS[key]
+            val = getattr(base, key)
+            if isinstance(val, tuple):
+                val = "[" + ",".join(f"{x:g}" for x in val) + "]"
+            print(f"    {key:<24} = {val!s:<14} {('[' + unit + ']') if unit else '':<14} {help_}")
+        print()
+    return 0
+
+
+def _pin_to_one_core() -> None:
+    """Pin the process to one core: OpenMM's CPU platform hands forces to a worker
+    thread, and for small systems the hand-off costs more than the force (measured up to
+    3-4x faster pinned; workflows/benchmark_engine.py)."""
+    try:
+        cores = sorted(os.sched_getaffinity(0))
+        os.sched_setaffinity(0, {cores[0]})
+    except (AttributeError, OSError):  # pragma: no cover - not on Linux
+        pass
+
+
+def cmd_run(args) -> int:
+    from .runner import run_scene
+
+    overrides = _parse_sets(args.set)
+    if args.seed is not None:
+        overrides["seed"] = args.seed
+    s = scn.make_scene(args.scene, overrides)
+    out = args.out or os.path.join("runs", s.scene)
+    threads = args.threads
+    if args.platform == "CPU" and not args.no_pin and (threads in (None, 1)):
+        _pin_to_one_core()
+        threads = 1
+
+    def bar(total):
+        from tqdm import tqdm
+
+        return tqdm(total=total, unit="step", unit_scale=True, desc=f"{s.scene}",
+                    disable=args.quiet, dynamic_ncols=True)
+
+    print(f"dnabraid run: scene '{s.scene}' -> {out}", file=sys.stderr)
+    summary = run_scene(s, out, platform=args.platform, threads=threads, progress_factory=bar)
+    print(f"time step {summary['time_step_ps']:.4g} ps: {summary['time_step_reason']}")
+    for n in summary["notes"]:
+        print(f"note: {n}")
+    print(f"{'turns':>7} {'extension_nm':>20} {'torque_pN_nm':>20} {'catenation':>18}")
+
+    def fmt(d, p=2):
+        if d["mean"] is None:
+            return "-"
+        return f"{d['mean']:.{p}f} +- {d['sem']:.{p}f}"
+
+    for pt in summary["points"]:
+        print(f"{pt['turns']:>7g} {fmt(pt['extension_nm'], 1):>20} "
+              f"{fmt(pt['torque_pN_nm'], 1):>20} {fmt(pt['catenation'], 3):>18}")
+    print(f"wall time {summary['wall_time_s']:.1f} s on {summary['platform']}; results in {out}/")
+    return 0
+
+
+def cmd_continuum(args) -> int:
+    from .continuum import cli as ccli
+
+    result = ccli.run(args)
+    if args.json:
+        print(json.dumps(result, indent=2, default=float))
+    else:
+        for k, v in result.items():
+            print(f"{k:>28}: {v}")
+    return 0 if result.get("success", True) else 1
+
+
+def build_parser() -> argparse.ArgumentParser:
+    p = argparse.ArgumentParser(prog="dnabraid", description=__doc__,
+                                formatter_class=argparse.RawDescriptionHelpFormatter)
+    sub = p.add_subparsers(dest="command")
+    r = sub.add_parser("run", help="simulate a scene (default: braid)")
+    r.add_argument("scene", nargs="?", default="braid", help="built-in scene name or SCENE.toml")
+    r.add_argument("--set", action="append", metavar="KEY=VALUE",
+                   help="override a scene key (see `dnabraid scenes`); repeatable")
+    r.add_argument("--out", help="run directory (default runs/SCENE); rerun to resume")
+    r.add_argument("--platform", default="CPU", help="OpenMM platform (CPU, Reference, CUDA...)")
+    r.add_argument("--threads", type=int, default=None, help="CPU platform threads")
+    r.add_argument("--no-pin", action="store_true", help="do not pin the process to one core")
+    r.add_argument("--seed", type=int, default=None, help="random seed")
+    r.add_argument("--quiet", action="store_true", help="no progress bar")
+    r.set_defaults(func=cmd_run)
+    s = sub.add_parser("scenes", help="list built-in scenes and their keys")
+    s.set_defaults(func=cmd_scenes)
+    try:
+        from .continuum import cli as ccli
+
+        c = sub.add_parser("continuum", help="rod-theory equilibria (ply, knot, overhand, tweezer)")
+        ccli.add_subparsers(c)
+        c.set_defaults(func=cmd_continuum)
+    except ImportError:  # pragma: no cover - continuum CLI not available
+        pass
+    return p
+
+
+def main(argv=None) -> int:
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    if not getattr(args, "func", None):
+        args = parser.parse_args(["run"] + (argv or []))
+    logging.basicConfig(level=logging.WARNING, format="%(levelname)s %(name)s: %(message)s")
+    try:
+        return args.func(args)
+    except (scn.SceneError, FileNotFoundError, ValueError) as exc:
+        print(f"dnabraid: error: {exc}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print("dnabraid: interrupted; finished turn values are checkpointed, rerun the same "
+              "command to resume", file=sys.stderr)
+        return 130
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())

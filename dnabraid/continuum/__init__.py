@@ -1,0 +1,1 @@
+"""Continuum elastic-rod theory: the equilibria the bead simulations are checked against."""

@@ -1,0 +1,187 @@
+"""Engine: Context, platform, Brownian integrator, time step, blow-up guards, state I/O."""
+
+from __future__ import annotations
+
+import logging
+import os
+
+import numpy as np
+import openmm
+from openmm import unit as u
+
+from . import units
+from .build import Model
+
+log = logging.getLogger(__name__)
+
+#: Friction coefficient handed to OpenMM's BrownianIntegrator; per-particle friction is
+#: carried by the masses (D = kT / (m gamma)), see :func:`dnabraid.units.friction_to_mass_amu`.
+GAMMA_PER_PS = 1.0
+#: A bond longer than this multiple of its rest length means the integration blew up.
+MAX_BOND_STRETCH = 1.5
+
+
+class SimulationBlowUp(RuntimeError):
+    """The integration went unstable.
+
+    Attributes
+    ----------
+    step : int
+        Step at which it was detected.
+    term : str
+        Force term with the largest force in the bad state (or the check that failed).
+    saved : str or None
+        Path of the last good state (OpenMM XML).
+    """
+
+    def __init__(self, message, *, step, term, saved=None):
+        super().__init__(message)
+        self.step = step
+        self.term = term
+        self.saved = saved
+
+
+def available_platforms() -> list[str]:
+    return [openmm.Platform.getPlatform(i).getName() for i in range(openmm.Platform.getNumPlatforms())]
+
+
+class Engine:
+    """Brownian dynamics of a built :class:`~dnabraid.build.Model`.
+
+    Parameters
+    ----------
+    model : Model
+    platform : str
+        'CPU' (default), 'Reference', 'CUDA' or 'OpenCL'.
+    seed : int
+        Seed of the integrator's random numbers.
+    threads : int, optional
+        CPU platform threads.
+    """
+
+    def __init__(self, model: Model, platform: str = "CPU", seed: int = 1,
+                 threads: int | None = None):
+        self.model = model
+        scene = model.scene
+        self.dt_ns = model.params["time_step_ns"]
+        self.integrator = openmm.BrownianIntegrator(
+            scene.temperature_K * u.kelvin, GAMMA_PER_PS / u.picosecond,
+            units.ns_to_ps(self.dt_ns) * u.picoseconds)
+        self.integrator.setRandomNumberSeed(int(seed) % (2**31 - 1) or 1)
+        self.integrator.setConstraintTolerance(1e-6)
+        names = available_platforms()
+        if platform not in names:
+            raise ValueError(f"platform {platform!r} is not available here; available: "
+                             + ", ".join(names))
+        plat = openmm.Platform.getPlatformByName(platform)
+        props = {}
+        if platform == "CPU" and threads:
+            props["Threads"] = str(int(threads))
+        if platform in ("CUDA", "OpenCL"):
+            props["Precision"] = "mixed"
+        self.platform = platform
+        self.context = openmm.Context(model.system, self.integrator, plat, props)
+        self.context.setPositions(model.positions * u.nanometer)
+        self.step = 0
+        self._bonds = model.bonds
+        self._b = scene.bead_spacing_nm
+
+    # -- state ---------------------------------------------------------------
+    def positions(self) -> np.ndarray:
+        st = self.context.getState(getPositions=True)
+        return st.getPositions(asNumpy=True).value_in_unit(u.nanometer)
+
+    def set_positions(self, pos_nm) -> None:
+        self.context.setPositions(np.asarray(pos_nm) * u.nanometer)
+
+    def set_parameter(self, name: str, value: float) -> None:
+        self.context.setParameter(name, float(value))
+
+    def energy_pN_nm(self, groups=None) -> float:
+        kw = {"getEnergy": True}
+        if groups is not None:
+            kw["groups"] = set(groups)
+        e = self.context.getState(**kw).getPotentialEnergy().value_in_unit(u.kilojoule_per_mole)
+        return units.energy_from_openmm(e)
+
+    def forces_pN(self, groups=None) -> np.ndarray:
+        kw = {"getForces": True}
+        if groups is not None:
+            kw["groups"] = set(groups)
+        f = self.context.getState(**kw).getForces(asNumpy=True)
+        return units.force_from_openmm(f.value_in_unit(u.kilojoule_per_mole / u.nanometer))
+
+    def minimise(self, tolerance_pN: float = 1.0, max_iterations: int = 2000) -> None:
+        """Local energy minimisation (immobile tethers stay put)."""
+        openmm.LocalEnergyMinimizer.minimize(
+            self.context, units.force_to_openmm(tolerance_pN), max_iterations)
+
+    def save_state(self, path: str) -> str:
+        """Write positions and parameters to ``path`` (OpenMM XML), atomically."""
+        st = self.context.getState(getPositions=True, getParameters=True)
+        tmp = path + ".tmp"
+        with open(tmp, "w") as fh:
+            fh.write(openmm.XmlSerializer.serialize(st))
+        os.replace(tmp, path)
+        return path
+
+    def load_state(self, path: str) -> None:
+        with open(path) as fh:
+            st = openmm.XmlSerializer.deserialize(fh.read())
+        self.context.setPositions(st.getPositions())
+        for k, v in st.getParameters().items():
+            self.context.setParameter(k, v)
+
+    # -- dynamics ------------------------------------------------------------
+    def advance(self, nsteps: int, fail_dir: str | None = None) -> np.ndarray:
+        """Take ``nsteps`` steps, then check the state; return positions (nm).
+
+        Raises
+        ------
+        SimulationBlowUp
+            On NaN/inf positions or a bond stretched past MAX_BOND_STRETCH x rest length;
+            the last good state is saved to ``fail_dir/last_good_state.xml``.
+        """
+        good = self.context.getState(getPositions=True, getParameters=True) if fail_dir else None
+        self.integrator.step(int(nsteps))
+        self.step += int(nsteps)
+        pos = self.positions()
+        problem = None
+        if not np.all(np.isfinite(pos)):
+            problem = "non-finite positions"
+        elif len(self._bonds):
+            r = np.linalg.norm(pos[self._bonds[:, 1]] - pos[self._bonds[:, 0]], axis=1)
+            worst = int(np.argmax(r))
+            if r[worst] > MAX_BOND_STRETCH * self._b:
+                problem = (f"bond {tuple(self._bonds[worst])} stretched to {r[worst]:.3g} nm "
+                           f"(> {MAX_BOND_STRETCH} x {self._b} nm)")
+        if problem:
+            self.blow_up(problem, good, fail_dir)
+        return pos
+
+    def largest_force_term(self) -> tuple[str, float]:
+        """Name and size (pN) of the term with the largest force in the current state."""
+        worst, fmax = "unknown", -1.0
+        for name, g in self.model.forces.items():
+            try:
+                f = self.forces_pN(groups=[g])
+                m = float(np.nanmax(np.abs(f))) if np.all(np.isfinite(f)) else float("inf")
+            except Exception:  # noqa: BLE001 - a NaN state can make OpenMM throw
+                m = float("inf")
+            if m > fmax:
+                worst, fmax = name, m
+        return worst, fmax
+
+    def blow_up(self, problem: str, good_state=None, fail_dir: str | None = None):
+        term, fmax = self.largest_force_term()
+        saved = None
+        if good_state is not None and fail_dir:
+            os.makedirs(fail_dir, exist_ok=True)
+            saved = os.path.join(fail_dir, "last_good_state.xml")
+            with open(saved, "w") as fh:
+                fh.write(openmm.XmlSerializer.serialize(good_state))
+        msg = (f"simulation blew up at step {self.step}: {problem}; largest force from term "
+               f"'{term}' ({fmax:.3g} pN); time step {self.dt_ns * 1e3:.4g} ps. "
+               + (f"Last good state saved to {saved}. " if saved else "")
+               + "Try a smaller timestep_safety or a finer bead spacing.")
+        raise SimulationBlowUp(msg, step=self.step, term=term, saved=saved)

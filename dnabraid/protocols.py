@@ -1,0 +1,215 @@
+"""Protocols: the magnetic-tweezer turn schedule (step n, equilibrate, sample), resumable.
+
+The turn values are run as two branches that start from the value nearest zero: upwards
+through the positive values, then, starting again from the state saved after the first
+value, downwards through the negative ones, so no turn is ramped twice. Each finished
+value is checkpointed (observables, frames and the final state) before the next one
+starts; a rerun into the same directory loads finished values instead of running them.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import logging
+import math
+import os
+
+import numpy as np
+
+from .analysis.geometry import catenation_number
+from .build import Model
+from .engine import Engine
+
+log = logging.getLogger(__name__)
+
+TWO_PI = 2.0 * math.pi
+
+
+@dataclasses.dataclass
+class PointResult:
+    """Samples at one turn value.
+
+    Attributes
+    ----------
+    turns : float
+    step : ndarray (n,) step index of each observable sample
+    extension_nm, torque_pN_nm, bead_angle_turns : ndarray (n,)
+    frame_step : ndarray (m,)
+    catenation : ndarray (m,)  (nan for a single tether)
+    frames : ndarray (m, N, 3) positions in nm
+    """
+
+    turns: float
+    step: np.ndarray
+    extension_nm: np.ndarray
+    torque_pN_nm: np.ndarray
+    bead_angle_turns: np.ndarray
+    frame_step: np.ndarray
+    catenation: np.ndarray
+    frames: np.ndarray
+
+    def save(self, path: str) -> None:
+        tmp = path + ".tmp.npz"
+        np.savez_compressed(tmp, **{f.name: getattr(self, f.name)
+                                    for f in dataclasses.fields(self)})
+        os.replace(tmp, path)
+
+    @classmethod
+    def load(cls, path: str) -> "PointResult":
+        with np.load(path) as z:
+            kw = {f.name: z[f.name] for f in dataclasses.fields(cls)}
+        kw["turns"] = float(kw["turns"])
+        return cls(**kw)
+
+
+def branches(turns) -> list[list[float]]:
+    """Split turn values into an upward branch from the value nearest 0 and a downward one."""
+    ts = sorted(float(t) for t in turns)
+    start = min(ts, key=lambda t: (abs(t), t))
+    up = [t for t in ts if t >= start]
+    down = [t for t in reversed(ts) if t < start]
+    return [up, down]
+
+
+def _tag(t: float) -> str:
+    return f"{t:+09.4f}"
+
+
+def steps_for(model: Model, current: float, target: float) -> int:
+    s = model.scene
+    ramp = 0 if model.scene.n_strands == 1 else int(math.ceil(abs(target - current) / s.turn_rate))
+    ramp = int(math.ceil(ramp / s.report_interval)) * s.report_interval
+    return ramp + s.equilibration_steps + s.steps
+
+
+def total_steps(model: Model) -> int:
+    tot = 0
+    for k, br in enumerate(branches(model.scene.turns)):
+        cur = 0.0 if k == 0 else branches(model.scene.turns)[0][0]
+        for t in br:
+            tot += steps_for(model, cur, t)
+            cur = t
+    return tot
+
+
+class TweezerProtocol:
+    """Run a tweezer scene's turn schedule on an :class:`Engine`, with checkpoints.
+
+    Parameters
+    ----------
+    model : Model
+    engine : Engine
+    checkpoint_dir : str
+        Where finished values and states are kept (created if needed).
+    progress : callable(int), optional
+        Called with the number of steps just taken.
+    """
+
+    def __init__(self, model: Model, engine: Engine, checkpoint_dir: str, progress=None):
+        self.model = model
+        self.engine = engine
+        self.dir = checkpoint_dir
+        self.progress = progress or (lambda n: None)
+        os.makedirs(self.dir, exist_ok=True)
+        self.braid = model.scene.n_strands == 2
+        self.K = model.scene.trap_stiffness_pN_nm
+
+    def _paths(self, t):
+        return (os.path.join(self.dir, f"point_{_tag(t)}.npz"),
+                os.path.join(self.dir, f"state_{_tag(t)}.xml"))
+
+    def run(self) -> list[PointResult]:
+        """Run (or load) every turn value; return results sorted by turns."""
+        s = self.model.scene
+        results = {}
+        init_state = os.path.join(self.dir, "state_initial.xml")
+        if os.path.exists(init_state):
+            self.engine.load_state(init_state)
+        else:
+            self.engine.minimise()
+            self.engine.save_state(init_state)
+        brs = branches(s.turns)
+        for k, br in enumerate(brs):
+            if not br:
+                continue
+            if k == 0:
+                cur = 0.0
+            else:
+                cur = brs[0][0]
+                self.engine.load_state(self._paths(cur)[1])
+            for t in br:
+                pfile, sfile = self._paths(t)
+                if os.path.exists(pfile) and os.path.exists(sfile):
+                    results[t] = PointResult.load(pfile)
+                    self.engine.load_state(sfile)
+                    self.progress(steps_for(self.model, cur, t))
+                    log.info("turns=%g loaded from checkpoint", t)
+                else:
+                    results[t] = self._run_point(cur, t)
+                    results[t].save(pfile)
+                    self.engine.save_state(sfile)
+                cur = t
+        return [results[t] for t in sorted(results)]
+
+    # ------------------------------------------------------------------------
+    def _observe(self, pos, angle0):
+        m = self.model
+        att = m.attachments
+        ext = float(np.mean(pos[att, 2]))
+        if not self.braid:
+            return ext, math.nan, math.nan
+        u = pos[att[1]] - pos[att[0]]
+        phi = math.atan2(u[1], u[0])
+        lag = (phi - angle0 + math.pi) % TWO_PI - math.pi  # phi - phi0 in (-pi, pi]
+        torque = -self.K * math.sin(lag)  # torque the trap applies to hold the braid
+        return ext, torque, (angle0 + lag) / TWO_PI
+
+    def _catenation(self, pos):
+        if not self.braid:
+            return math.nan
+        c = self.model.chains
+        return catenation_number(pos[c[0]], pos[c[1]])
+
+    def _run_point(self, current: float, target: float) -> PointResult:
+        s = self.model.scene
+        e = self.engine
+        ri = s.report_interval
+        fail_dir = os.path.dirname(self.dir)
+        # 1. ramp the trap angle
+        if self.braid:
+            nramp = int(math.ceil(abs(target - current) / s.turn_rate / ri))
+            for i in range(1, nramp + 1):
+                ang = TWO_PI * (current + (target - current) * i / nramp)
+                e.set_parameter("trap_angle", ang)
+                pos = e.advance(ri, fail_dir)
+                self.progress(ri)
+            e.set_parameter("trap_angle", TWO_PI * target)
+        angle0 = TWO_PI * target
+        # 2. equilibrate
+        left = s.equilibration_steps
+        while left > 0:
+            n = min(left, max(ri, 10 * ri))
+            pos = e.advance(n, fail_dir)
+            self.progress(n)
+            left -= n
+        # 3. sample
+        nsamp = s.steps // ri
+        every = s.frame_interval // ri
+        step, ext, tor, ang = (np.empty(nsamp) for _ in range(4))
+        fsteps, cats, frames = [], [], []
+        for i in range(nsamp):
+            pos = e.advance(ri, fail_dir)
+            self.progress(ri)
+            step[i] = e.step
+            ext[i], tor[i], ang[i] = self._observe(pos, angle0)
+            if (i + 1) % every == 0:
+                ca = self._catenation(pos)
+                if self.braid and abs(ca - ang[i]) > 0.5:
+                    e.blow_up(f"catenation {ca:.3f} no longer follows the bead angle "
+                              f"{ang[i]:.3f} turns: the strands passed through each other",
+                              None, None)
+                fsteps.append(e.step)
+                cats.append(ca)
+                frames.append(pos.astype(np.float32))
+        return PointResult(target, step, ext, tor, ang, np.array(fsteps), np.array(cats),
+                           np.array(frames).reshape(len(frames), -1, 3))
