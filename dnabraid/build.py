@@ -18,13 +18,13 @@ import openmm
 import openmm.app as app
 
 from . import forcefield, units
-from .forces import (bending_force, pull_force, stretch_force, trap_force, wall_force,
+from .forces import (bead_exclusion_force, bending_force, pull_force, stretch_force, trap_force, wall_force,
                      wca_exclusions, wca_force)
 from .scene import Scene
 
 #: Force groups, one per physical term, so blow-ups and benchmarks can name the term.
 GROUPS = {"stretch": 0, "bend": 1, "wca": 2, "wall": 3, "pull": 4, "trap": 5, "link": 6,
-          "chiral": 7}
+          "beadwall": 7, "chiral": 8}
 
 
 @dataclasses.dataclass
@@ -77,7 +77,9 @@ def build(scene: Scene) -> Model:
     n_str = scene.n_strands
     xs = [0.0] if n_str == 1 else [-0.5 * scene.tether_separation_nm,
                                    0.5 * scene.tether_separation_nm]
-    zeta_attach = max(zeta_dna, scene.bead_friction_factor * zeta_bead_phys / n_str)
+    zeta_center = scene.bead_friction_factor * zeta_bead_phys
+    # tether: the bead is the attachment point itself; braid: the bead centre is its own particle
+    zeta_attach = max(zeta_dna, zeta_center) if n_str == 1 else zeta_dna
     for s in range(n_str):
         chain = topology.addChain(id="AB"[s])
         idx = []
@@ -110,8 +112,14 @@ def build(scene: Scene) -> Model:
     if scene.stretch == "bonds":
         add(stretch_force(bonds, k_bond, b, name="stretch"), "stretch")
     else:
+        # OpenMM cannot constrain an immobile (massless) particle: the tether bonds stay
+        # harmonic springs, all others are rigid.
+        fixed_set = {int(c[0]) for c in chains}
+        springs = [(i, j) for i, j in bonds if int(i) in fixed_set or int(j) in fixed_set]
+        add(stretch_force(springs, k_bond, b, name="stretch"), "stretch")
         for i, j in bonds:
-            system.addConstraint(int(i), int(j), b)
+            if int(i) not in fixed_set and int(j) not in fixed_set:
+                system.addConstraint(int(i), int(j), b)
     add(bending_force(triplets, kappa, name="bend"), "bend")
     excl_extra = []
     if n_str == 2:
@@ -122,20 +130,42 @@ def build(scene: Scene) -> Model:
     wall_k = 456.0 * kT / d**2  # = U''_WCA(sigma): as stiff as bead contact
     if scene.surface:
         add(wall_force(mobile, 0.5 * d, wall_k, name="wall"), "wall")
-    add(pull_force(attachments, [1.0 / n_str] * n_str, scene.force_pN, name="pull"), "pull")
-    link_k = k_bond
+    bead_center = None
     if n_str == 2:
-        trap_r = 0.5 * scene.tether_separation_nm
+        # The magnetic bead: a rigid triangle of the two attachment points and the bead
+        # centre C, which lies at the bead radius R from both attachments, above them.
+        # C carries the bead's friction and the magnetic force; the sphere of radius R
+        # around C excludes DNA, so strands cannot slip over the bead and unbraid.
+        R = scene.bead_radius_nm
+        half = 0.5 * scene.tether_separation_nm
+        h = math.sqrt(R * R - half * half)
+        chain = topology.addChain(id="M")
+        res = topology.addResidue("BEA", chain)
+        topology.addAtom("MB", None, res)
+        bead_center = system.addParticle(units.friction_to_mass_amu(zeta_center))
+        for f in system.getForces():  # give the centre a slot in per-particle forces (WCA):
+            if isinstance(f, openmm.CustomNonbondedForce):  # it never comes near DNA there
+                f.addParticle([])
+        top = positions[attachments].mean(axis=0)
+        positions = np.vstack([positions, top + np.array([0.0, 0.0, h])])
+        add(pull_force([bead_center], [1.0], scene.force_pN, name="pull"), "pull")
+        trap_r = half
         tilt_k = scene.trap_stiffness_pN_nm / trap_r**2
         add(trap_force(attachments[0], attachments[1], scene.trap_stiffness_pN_nm, 0.0,
                        tilt_k, name="trap"), "trap")
-        if scene.stretch == "bonds":
-            add(stretch_force([attachments], link_k, scene.tether_separation_nm, name="link"),
-                "link")
-        else:
-            system.addConstraint(attachments[0], attachments[1], scene.tether_separation_nm)
+        add(stretch_force([attachments, (attachments[0], bead_center),
+                           (attachments[1], bead_center)], k_bond,
+                          [scene.tether_separation_nm, R, R], name="link"), "link")
+        near = {int(c[-1]) for c in chains} | {int(c[-2]) for c in chains}
+        dna = [int(i) for c in chains for i in c[1:] if int(i) not in near]
+        add(bead_exclusion_force(bead_center, dna, R + 0.5 * d,
+                                 wall_k, name="beadwall"), "beadwall")
+    else:
+        add(pull_force(attachments, [1.0], scene.force_pN, name="pull"), "pull")
     params = {
         "kT_pN_nm": kT,
+        "bead_center": bead_center,
+        "zeta_center_pN_ns_per_nm": zeta_center,
         "kappa_kT": kappa_kT,
         "kappa_pN_nm": kappa,
         "k_bond_pN_per_nm": k_bond,
@@ -167,7 +197,8 @@ def stiffest_mode(scene: Scene, p: dict) -> dict:
     mu = 1.0 / p["zeta_dna_pN_ns_per_nm"]
     mu_a = 1.0 / p["zeta_attach_pN_ns_per_nm"]
     rates = {
-        "stretch": (4.0 * p["k_bond_pN_per_nm"] * mu) if scene.stretch == "bonds" else 0.0,
+        # constraints: only the tether bond is a spring (one bead against a fixed point)
+        "stretch": (4.0 if scene.stretch == "bonds" else 2.0) * p["k_bond_pN_per_nm"] * mu,
         "bend": 16.0 * p["kappa_pN_nm"] / b**2 * mu,
         "wca": 2.0 * 456.0 * kT / d**2 * mu,
         "wall": p["wall_k_pN_per_nm"] * mu,
@@ -175,7 +206,7 @@ def stiffest_mode(scene: Scene, p: dict) -> dict:
     if scene.n_strands == 2:
         r = 0.5 * scene.tether_separation_nm
         rates["trap"] = 2 * scene.trap_stiffness_pN_nm / r**2 * mu_a
-        rates["link"] = (2 * p["k_bond_pN_per_nm"] * mu_a) if scene.stretch == "bonds" else 0.0
+        rates["link"] = 3 * p["k_bond_pN_per_nm"] * mu_a
     total = rates["stretch"] + rates["bend"] + rates["wca"]
     total = max(total, rates["wall"] + rates["stretch"], rates.get("trap", 0) + rates.get("link", 0))
     stiff = max(rates, key=rates.get)

@@ -128,6 +128,7 @@ class TweezerProtocol:
         else:
             self.engine.minimise()
             self.engine.save_state(init_state)
+        self._sync_angle(0.0)
         brs = branches(s.turns)
         for k, br in enumerate(brs):
             if not br:
@@ -137,11 +138,13 @@ class TweezerProtocol:
             else:
                 cur = brs[0][0]
                 self.engine.load_state(self._paths(cur)[1])
+                self._sync_angle(cur)
             for t in br:
                 pfile, sfile = self._paths(t)
                 if os.path.exists(pfile) and os.path.exists(sfile):
                     results[t] = PointResult.load(pfile)
                     self.engine.load_state(sfile)
+                    self._sync_angle(t)
                     self.progress(steps_for(self.model, cur, t))
                     log.info("turns=%g loaded from checkpoint", t)
                 else:
@@ -152,17 +155,35 @@ class TweezerProtocol:
         return [results[t] for t in sorted(results)]
 
     # ------------------------------------------------------------------------
+    def _sync_angle(self, turns: float) -> None:
+        """Unwrap the bead angle of the current state next to the trap angle 2 pi turns."""
+        self._phi = TWO_PI * turns
+        if self.braid:
+            self._bead_angle(self.engine.positions())
+
+    def _bead_angle(self, pos) -> float:
+        """Bead angle (rad), unwrapped continuously from the previous sample."""
+        att = self.model.attachments
+        u = pos[att[1]] - pos[att[0]]
+        raw = math.atan2(u[1], u[0])
+        self._phi = self._phi + ((raw - self._phi + math.pi) % TWO_PI - math.pi)
+        return self._phi
+
     def _observe(self, pos, angle0):
         m = self.model
-        att = m.attachments
-        ext = float(np.mean(pos[att, 2]))
+        ext = float(np.mean(pos[m.attachments, 2]))
         if not self.braid:
             return ext, math.nan, math.nan
-        u = pos[att[1]] - pos[att[0]]
-        phi = math.atan2(u[1], u[0])
-        lag = (phi - angle0 + math.pi) % TWO_PI - math.pi  # phi - phi0 in (-pi, pi]
+        phi = self._bead_angle(pos)
+        lag = phi - angle0
+        if abs(lag) > 0.5 * math.pi:
+            self.engine.blow_up(
+                f"the bead slipped in the rotational trap (bead {phi / TWO_PI:.3f} turns, trap "
+                f"{angle0 / TWO_PI:.3f} turns): the braid's torque exceeded the trap stiffness "
+                f"K = {self.K} pN nm or the turns were ramped too fast (turn_rate = "
+                f"{self.model.scene.turn_rate}); raise trap_stiffness_pN_nm or lower turn_rate")
         torque = -self.K * math.sin(lag)  # torque the trap applies to hold the braid
-        return ext, torque, (angle0 + lag) / TWO_PI
+        return ext, torque, phi / TWO_PI
 
     def _catenation(self, pos):
         if not self.braid:
@@ -182,14 +203,16 @@ class TweezerProtocol:
                 ang = TWO_PI * (current + (target - current) * i / nramp)
                 e.set_parameter("trap_angle", ang)
                 pos = e.advance(ri, fail_dir)
+                self._observe(pos, ang)
                 self.progress(ri)
             e.set_parameter("trap_angle", TWO_PI * target)
         angle0 = TWO_PI * target
         # 2. equilibrate
         left = s.equilibration_steps
         while left > 0:
-            n = min(left, max(ri, 10 * ri))
+            n = min(left, ri)
             pos = e.advance(n, fail_dir)
+            self._observe(pos, angle0)
             self.progress(n)
             left -= n
         # 3. sample

@@ -83,13 +83,14 @@ def run_scene(scene: Scene, out: str, *, platform: str = "CPU", threads: int | N
     reporters.write_observables(os.path.join(out, "observables.csv"), results, dt_ns)
     n_part = model.system.getNumParticles()
     notes = []
-    if p["zeta_attach_pN_ns_per_nm"] < p["zeta_bead_physical_pN_ns_per_nm"] / scene.n_strands:
+    zeta_bead = p["zeta_center_pN_ns_per_nm"] if scene.n_strands == 2 else p["zeta_attach_pN_ns_per_nm"]
+    if zeta_bead < p["zeta_bead_physical_pN_ns_per_nm"]:
         notes.append(
-            f"bead friction reduced for sampling: {p['zeta_attach_pN_ns_per_nm']:.3g} pN ns/nm "
-            f"per attachment point instead of the physical Stokes friction "
-            f"{p['zeta_bead_physical_pN_ns_per_nm']:.3g} pN ns/nm of a "
-            f"{scene.bead_radius_nm} nm bead; equilibrium averages are unaffected, times are not "
-            "physical")
+            f"bead friction reduced for sampling: {zeta_bead:.3g} pN ns/nm instead of the "
+            f"physical Stokes friction {p['zeta_bead_physical_pN_ns_per_nm']:.3g} pN ns/nm of a "
+            f"{scene.bead_radius_nm} nm bead (bead_friction_factor = "
+            f"{scene.bead_friction_factor}); equilibrium averages are unaffected, times are "
+            "not physical")
     if resumed:
         notes.append("resumed from checkpoints; wall_time_s counts this invocation only")
     summary = {

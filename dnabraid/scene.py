@@ -79,20 +79,20 @@ class Scene:
     tether_separation_nm: float = 40.0
     persistence_nm: float = 50.0
     temperature_K: float = 298.15
-    steps: int = 60000
-    equilibration_steps: int = 15000
-    turn_rate: float = 2e-4
+    steps: int = 200000
+    equilibration_steps: int = 50000
+    turn_rate: float = 5e-5
     seed: int = 1
     diameter_nm: float = 0.0
     stretch_modulus_pN: float = 1100.0
     stretch: str = "bonds"
     bead_radius_nm: float = 500.0
     bead_friction_factor: float = 0.01
-    trap_stiffness_pN_nm: float = 2000.0
+    trap_stiffness_pN_nm: float = 20000.0
     report_interval: int = 100
-    frame_interval: int = 2000
+    frame_interval: int = 5000
     surface: bool = True
-    timestep_safety: float = 0.25
+    timestep_safety: float = 0.3
 
     # -- derived ---------------------------------------------------------------
     @property
@@ -264,7 +264,7 @@ def make_scene(base: str | os.PathLike = "braid", overrides: dict | None = None)
         values.update(BUILTIN[kind])
         values.update(data)
     else:
-        raise SceneError(f"unknown scene {base_s!r}: give a built-in scene ("
+        raise SceneError(f"unknown scene {base_s!r}: give one of the built-in scenes ("
                          + ", ".join(BUILTIN) + ") or a path to a .toml file")
     if overrides:
         values.update(overrides)

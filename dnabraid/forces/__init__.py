@@ -8,7 +8,7 @@ one it means. Every energy has a numpy twin in :mod:`dnabraid.forces.reference`.
 
 from .bonded import bending_force, stretch_force
 from .excluded import wca_exclusions, wca_force
-from .external import pull_force, trap_force, wall_force
+from .external import bead_exclusion_force, pull_force, trap_force, wall_force
 
 __all__ = [
     "bending_force",
@@ -18,4 +18,5 @@ __all__ = [
     "wall_force",
     "pull_force",
     "trap_force",
+    "bead_exclusion_force",
 ]

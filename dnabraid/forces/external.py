@@ -56,3 +56,19 @@ def trap_force(p1: int, p2: int, stiffness_pN_nm: float, angle_rad: float = 0.0,
     f.addGlobalParameter(f"{name}_ktilt", float(tilt_k_pN_per_nm) * PN_NM_IN_KJ_MOL)
     f.addBond([int(p1), int(p2)], [])
     return f
+
+
+def bead_exclusion_force(center: int, particles, radius_nm: float, k_pN_per_nm: float, *,
+                         name: str = "beadwall") -> openmm.CustomBondForce:
+    """Hard sphere of the magnetic bead: U = k/2 (R - r)^2 for r < R, r = |r_i - r_C|.
+
+    One bond-like term (centre, DNA bead) per bead: a ``CustomBondForce`` needs no
+    cutoff, and all nonbonded forces of a System must agree on cutoffs.
+    """
+    f = openmm.CustomBondForce(f"0.5*{name}_k*({name}_R-r)^2*step({name}_R-r)")
+    f.setName(name)
+    f.addGlobalParameter(f"{name}_k", float(k_pN_per_nm) * PN_NM_IN_KJ_MOL)
+    f.addGlobalParameter(f"{name}_R", float(radius_nm))
+    for i in np.asarray(particles, dtype=int).ravel():
+        f.addBond(int(center), int(i), [])
+    return f
