@@ -96,6 +96,11 @@ def build(scene: Scene) -> Model:
             positions.append((xs[s], 0.0, i * b))
         chains.append(np.array(idx))
     positions = np.array(positions, float)
+    if n_str == 1:
+        from .geometry import random_tether
+
+        positions = random_tether(n, b, kappa_kT, scene.seed,
+                                  z_min=0.5 * d if scene.surface else None)
     attachments = [int(c[-1]) for c in chains]
     fixed = [int(c[0]) for c in chains]
     bonds = np.array([(c[i], c[i + 1]) for c in chains for i in range(len(c) - 1)], int)

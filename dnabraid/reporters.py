@@ -27,13 +27,18 @@ def atomic_write_text(path: str, text: str) -> None:
     os.replace(tmp, path)
 
 
+#: An autocorrelation-corrected SEM is trusted when the run holds this many correlation times.
+MIN_N_EFF = 20
+
+
 def _ms(x) -> dict:
     x = np.asarray(x, float)
     if x.size == 0 or not np.all(np.isfinite(x)):
         return {"mean": None, "sem": None}
     r = mean_sem(x)
     return {"mean": float(r["mean"]), "sem": float(r["sem"]),
-            "tau_int_samples": float(r["tau_int"]), "n_eff": float(r["n_eff"])}
+            "tau_int_samples": float(r["tau_int"]), "n_eff": float(r["n_eff"]),
+            "sem_reliable": bool(r["n_eff"] >= MIN_N_EFF)}
 
 
 def summarise_points(results) -> list[dict]:

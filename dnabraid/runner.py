@@ -114,6 +114,12 @@ def run_scene(scene: Scene, out: str, *, platform: str = "CPU", threads: int | N
         "versions": reporters.versions(),
         "points": reporters.summarise_points(results),
     }
+    short = [pt["turns"] for pt in summary["points"]
+             if pt["extension_nm"].get("sem_reliable") is False]
+    if short:
+        notes.append(
+            f"sampling at turns {short} spans fewer than {reporters.MIN_N_EFF} correlation times "
+            "of the extension: its SEM is a rough estimate (likely too small); raise `steps`")
     reporters.write_summary(os.path.join(out, "summary.json"), summary)
     plots.extension_torque_plot(summary, os.path.join(out, "extension_torque.png"))
     return summary

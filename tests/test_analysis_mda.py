@@ -2,15 +2,13 @@
 
 import warnings
 
+import MDAnalysis as mda
 import numpy as np
-import openmm.app as app
-import openmm.unit as unit
 import pytest
+from openmm import app, unit
 
-mda = pytest.importorskip("MDAnalysis")
-
-from dnabraid.analysis import geometry  # noqa: E402
-from dnabraid.analysis.mda import (  # noqa: E402
+from dnabraid.analysis import geometry
+from dnabraid.analysis.mda import (
     BendingPersistence,
     Catenation,
     CrossingAngles,

@@ -46,8 +46,8 @@ MIN_SAMPLES = 10
 
 def _as_series(x) -> np.ndarray:
     arr = np.asarray(x, dtype=np.float64)
-    if arr.ndim != 1:
-        arr = arr.reshape(-1) if arr.size == arr.shape[0] else arr
+    if arr.ndim == 2 and arr.shape[1] == 1:  # a column vector is accepted
+        arr = arr[:, 0]
     if arr.ndim != 1:
         raise ValueError(f"x must be a one-dimensional series; got shape {arr.shape}")
     if arr.size == 0:

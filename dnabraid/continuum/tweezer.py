@@ -237,7 +237,6 @@ def solve_tweezer(turns: float, force_pN: float, length_nm: float, tether_separa
         raise ValueError(f"xatol must be positive, got {xatol!r}")
     sigma = 1.0 if n >= 0 else -1.0
     n_abs = abs(n)
-    r = 0.5 * delta
     n_c = math.acos(min(1.0, delta / d)) / math.pi
     if n_abs == 0.0:
         vals = _free_branch(0.0, F, L, d)
@@ -261,7 +260,7 @@ def solve_tweezer(turns: float, force_pN: float, length_nm: float, tether_separa
         wall = time.perf_counter() - t0
         return ContinuumResult(True, 0, "converged (free branch: strands apart)",
                                _finish(vals, sigma), 0.0, nfev + 1, wall)
-    G, z, Lp, lt, h, rho = model.parts(best["theta"], best["psi0"])
+    *_, h, rho = model.parts(best["theta"], best["psi0"])
     if h <= 1e-12 * L and rho > 1e-9 * L:
         return ContinuumResult(False, 4, f"tails lie flat on the surface (h = {h:.3g} nm) at "
                                f"F={F} pN: the tension is too small to resolve the braid "
@@ -304,7 +303,9 @@ def _braid_minimum(model: _Model, xatol, initial, sigma):
 
         # scan in log(tan theta) when the window spans decades
         if lock / lo > 50:
-            g = lambda u: f(math.atan(math.exp(u)))  # noqa: E731
+            def g(u):
+                return f(math.atan(math.exp(u)))
+
             u, val, nf = _bounded_min(g, math.log(math.tan(lo)), 0.0, N_SCAN_THETA, xatol)
             counter["nfev"] += nf
             return math.atan(math.exp(u)), val
@@ -445,7 +446,7 @@ def cli_add_arguments(parser: argparse.ArgumentParser) -> None:
 def cli_run(args) -> dict:
     """Solve the tweezer braid for each ``--turns``; JSON-serialisable summary."""
     t0 = time.perf_counter()
-    kw = dict(bending_pN_nm2=args.bending_pN_nm2, alpha_pN=args.alpha_pN)
+    kw = {"bending_pN_nm2": args.bending_pN_nm2, "alpha_pN": args.alpha_pN}
     geo = (args.force_pN, args.length_nm, args.tether_separation_nm, args.delta_nm)
     rows = []
     for res, n in zip(tweezer_curve(args.turns, *geo, **kw), args.turns):

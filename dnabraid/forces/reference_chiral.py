@@ -1,0 +1,398 @@
+"""Numpy twin of the chiral DNA-DNA interaction (dnabraid units: nm, pN, pN nm).
+
+Continuum model (seed: van der Heijden, "Equilibrium theory of elastic braids", slides 5 and
+32, after Kornyshev, Lee, Leikin & Wynveen, Rev. Mod. Phys. 79, 943 (2007)): two strands in
+contact carry the energy per unit length of contact
+
+    phi = alpha tan(eta / 2),                                            (slide 32)
+
+where eta is the braid angle, the signed angle by which the tangent t1 must be turned about
+the unit chord d1 (from strand 1 to strand 2) to reach t2 (braid frame {t1, d1, u1}, slide 5:
+t2 = cos(eta) t1 - sin(eta) u1, u1 = t1 x d1), so that
+
+    eta = atan2((t1 x t2) . d1, t1 . t2).
+
+The bead model replaces the contact integral  E = int phi ds  (slide 5, E = int_0^L phi ds)
+by a double sum over pairs of segments (and over ``q`` sample points per segment), see
+:func:`pair_terms`:
+
+    E = alpha sum_{a<b} sum_{k,m} (l_a/q)(l_b/q) K(|p_b^m - p_a^k|) G(eta_ab^{km})      (C1)
+
+* K(r) = A f(r) c(r) is a distance weight with f(r) = 1/(1 + exp((r - Delta)/lambda_D))
+  (a Fermi step: flat below the contact distance Delta, decaying like the Debye screening
+  exp(-r/lambda_D) beyond it) and c(r) a C2 switch to zero between r_s = Delta + 4 lambda_D
+  and r_c = Delta + 6 lambda_D. A normalises the weight along a straight partner at distance
+  Delta:  int K(sqrt(Delta^2 + v^2)) dv = 1  (C2).
+* G(c, s) = (c^2 + s^2) tan(eta'/2) sqrt(cos eta') S(eta') / N(eta') (C3), with c = t_a . t_b,
+  s = (t_a x t_b) . d, eta' = atan(s/c) = eta folded into (-pi/2, pi/2) (apolar DNA) and S a
+  C2 switch from 1 at |eta'| <= eta_on (60 deg by default) to 0 at |eta'| = pi/2. The factor
+  sqrt(cos eta') undoes the geometric fact that the distance between two helices of a two-ply
+  grows as r^2 = Delta^2 + u^2 cos(eta) with the offset u along the partner, so
+  int K du = 1/sqrt(cos eta) (C4). The facing factor c^2 + s^2 (1 at contact points) makes G
+  vanish where eta is undefined (c = s = 0). N(eta), a quadratic in eta^2 near 0.91, is fitted
+  at construction so that an ideal uniform two-ply carries alpha tan(eta/2) per unit strand
+  length for |eta| <= eta_on (C5; within 0.2 % continuous, 1 % for 0.5 nm beads).
+
+Everything here is brute force over all segment pairs: it is the oracle for the pair search
+and the OpenMM force in :mod:`dnabraid.forces.chiral`, which share :func:`pair_terms`.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from scipy import integrate
+from scipy.special import expit
+
+#: r_c = Delta + CUTOFF_DEBYE lambda_D: the weight is exactly zero beyond.
+CUTOFF_DEBYE = 6.0
+#: The distance switch starts at r_s = Delta + SWITCH_DEBYE lambda_D.
+SWITCH_DEBYE = 4.0
+#: Folded braid angle at which the angular switch starts (rad).
+ETA_ON = math.pi / 3.0
+
+
+def _smootherstep(x):
+    """C2 switch 1 -> 0 on x in [0, 1]: 1 - 10x^3 + 15x^4 - 6x^5, and its derivative."""
+    x = np.clip(x, 0.0, 1.0)
+    s = 1.0 - x**3 * (10.0 - 15.0 * x + 6.0 * x * x)
+    ds = -30.0 * x * x * (1.0 - x) ** 2
+    return s, ds
+
+
+class ChiralKernel:
+    """Distance weight K(r) and angular factor G(eta) of Eq. (C1); see the module docstring.
+
+    Parameters
+    ----------
+    delta_nm : float
+        Effective diameter Delta (contact distance).
+    debye_nm : float
+        Debye length lambda_D: the range of the weight.
+    cutoff_debye, switch_debye : float
+        r_c = Delta + cutoff_debye lambda_D, r_s = Delta + switch_debye lambda_D.
+    eta_on_rad : float
+        The angular switch S(eta') starts at |eta'| = eta_on (< pi/2).
+    """
+
+    def __init__(self, delta_nm, debye_nm, *, cutoff_debye=CUTOFF_DEBYE,
+                 switch_debye=SWITCH_DEBYE, eta_on_rad=ETA_ON, calibrate=True):
+        self.delta = float(delta_nm)
+        self.debye = float(debye_nm)
+        if not (self.delta > 0 and self.debye > 0):
+            raise ValueError(f"delta_nm and debye_nm must be > 0, got {delta_nm!r}, {debye_nm!r}")
+        if not 0 < switch_debye < cutoff_debye:
+            raise ValueError("need 0 < switch_debye < cutoff_debye, got "
+                             f"{switch_debye!r}, {cutoff_debye!r}")
+        if not 0 <= eta_on_rad < math.pi / 2:
+            raise ValueError(f"eta_on_rad must lie in [0, pi/2), got {eta_on_rad!r}")
+        self.r_c = self.delta + cutoff_debye * self.debye
+        self.r_s = self.delta + switch_debye * self.debye
+        self.eta_on = float(eta_on_rad)
+        self.amplitude = 1.0
+        # Eq. (C2): int_{-inf}^{inf} K(sqrt(Delta^2 + v^2)) dv = 1.
+        vmax = math.sqrt(self.r_c**2 - self.delta**2)
+        val, _ = integrate.quad(lambda v: self.weight(math.hypot(self.delta, v))[0], 0.0, vmax,
+                                epsabs=0.0, epsrel=1e-12, limit=200)
+        self.amplitude = 1.0 / (2.0 * val)
+        self.ncoef = np.array([1.0])
+        if calibrate:
+            self._calibrate()
+
+    def weight(self, r):
+        """K(r) and dK/dr (1/nm, 1/nm^2)."""
+        r = np.asarray(r, float)
+        x = (r - self.delta) / self.debye
+        f = expit(-x)
+        df = -f * (1.0 - f) / self.debye
+        c, dc = _smootherstep((r - self.r_s) / (self.r_c - self.r_s))
+        dc = dc / (self.r_c - self.r_s)
+        return self.amplitude * f * c, self.amplitude * (df * c + f * dc)
+
+    def _h(self, eta):
+        """H(eta') = tan(eta'/2) sqrt(cos eta') S(eta') / N(eta') and dH/deta' (|eta'| < pi/2)."""
+        a = np.abs(eta)
+        sw, dsw = _smootherstep((a - self.eta_on) / (0.5 * math.pi - self.eta_on))
+        dsw = dsw * np.sign(eta) / (0.5 * math.pi - self.eta_on)
+        live = sw > 0.0
+        cos_e = np.where(live, np.cos(eta), 1.0)
+        sq = np.sqrt(cos_e)
+        th = np.tan(0.5 * eta)
+        x = eta * eta
+        n = np.polyval(self.ncoef, x)
+        dn = np.polyval(np.polyder(self.ncoef), x) * 2.0 * eta
+        h = th * sq * sw / n
+        dh = (0.5 * (1.0 + th * th) * sq * sw
+              - th * np.sin(eta) / (2.0 * sq) * sw
+              + th * sq * dsw) / n - h * dn / n
+        return np.where(live, h, 0.0), np.where(live, dh, 0.0)
+
+    def angular(self, c, s):
+        """G(c, s) = (c^2 + s^2) H(eta') and its partial derivatives dG/dc, dG/ds.
+
+        ``c = t1 . t2`` and ``s = (t1 x t2) . d``, eta = atan2(s, c). The fold
+        eta' = atan(s / c) takes eta modulo pi into (-pi/2, pi/2) (Eq. C3); H vanishes with
+        its first two derivatives at |eta'| = pi/2, so the fold is smooth. The facing factor
+        rho^2 = c^2 + s^2 <= 1 equals 1 when the chord is perpendicular to both tangents (the
+        contact points of a braid) and makes G vanish smoothly where eta is undefined
+        (c = s = 0: perpendicular tangents with the chord in their plane).
+        """
+        c = np.asarray(c, float)
+        s = np.asarray(s, float)
+        rho2 = c * c + s * s
+        ok = np.abs(c) > 1e-12
+        cs = np.where(ok, c, 1.0)
+        eta = np.arctan(np.where(ok, s, 0.0) / cs)  # folded: (-pi/2, pi/2)
+        h, dh = self._h(eta)
+        h = np.where(ok, h, 0.0)
+        dh = np.where(ok, dh, 0.0)
+        # d eta / dc = -s / rho^2, d eta / ds = c / rho^2 (same for the folded angle).
+        return rho2 * h, 2.0 * c * h - s * dh, 2.0 * s * h + c * dh
+
+    def target(self, eta):
+        """alpha-free energy per unit strand length of an ideal two-ply: tan(eta/2) S(eta)."""
+        eta = np.asarray(eta, float)
+        sw, _ = _smootherstep((np.abs(eta) - self.eta_on) / (0.5 * math.pi - self.eta_on))
+        return np.tan(0.5 * eta) * sw
+
+    def two_ply_density(self, eta, du=0.005):
+        """Energy per unit strand length (units of alpha) of a continuous ideal two-ply.
+
+        Two helices of radius Delta/2 about a common axis, at interaxial distance Delta,
+        with braid angle ``eta`` (helix angle |eta|/2; right-handed for eta < 0): the
+        integral of K G over the partner strand seen from one point of the first.
+        """
+        eta = float(eta)
+        R = 0.5 * self.delta
+        th = 0.5 * abs(eta)
+        umax = self.r_c + 1.0
+        u = np.arange(-umax, umax + du / 2, du)
+        if th < 1e-12:
+            p1 = np.array([R, 0.0, 0.0])
+            p2 = np.stack([np.full_like(u, -R), 0 * u, u], 1)
+            t1 = np.array([0.0, 0.0, 1.0])
+            t2 = np.broadcast_to(t1, p2.shape)
+        else:
+            hand = -1.0 if eta > 0 else 1.0  # eta < 0: right-handed
+            pitch = R / math.tan(th)
+            ds = math.hypot(R, pitch)
+            ph = u / ds
+            p1 = np.array([R, 0.0, 0.0])
+            t1 = np.array([0.0, hand * R, pitch]) / ds
+            p2 = np.stack([-R * np.cos(hand * ph), -R * np.sin(hand * ph), pitch * ph], 1)
+            t2 = np.stack([hand * R * np.sin(hand * ph), -hand * R * np.cos(hand * ph),
+                           np.full_like(ph, pitch)], 1) / ds
+        r = p2 - p1
+        rn = np.linalg.norm(r, axis=1)
+        d = r / rn[:, None]
+        c = t2 @ t1
+        s = np.einsum("ij,ij->i", np.cross(t1, t2), d)
+        K, _ = self.weight(rn)
+        G, _, _ = self.angular(c, s)
+        return float(np.trapezoid(K * G, dx=du))
+
+    def _calibrate(self, iterations=3, degree=2):
+        """Fit N(eta) (a quadratic in eta^2) so that two_ply_density == target (Eq. C5).
+
+        The fit covers 0 < |eta| <= eta_on, where the switch is off; N is smooth and close
+        to 0.9 (the chord between off-contact points is not perpendicular to the tangents,
+        which shrinks both |s| and the facing factor).
+        """
+        etas = np.linspace(0.02, max(self.eta_on, 0.1), 16)
+        for _ in range(iterations):
+            ratio = np.array([self.two_ply_density(e) / self.target(e) for e in etas])
+            nval = np.polyval(self.ncoef, etas**2) * ratio
+            self.ncoef = np.polyfit(etas**2, nval, degree)
+
+
+def segments_of(chains, closed=False):
+    """Segments of a list of chains.
+
+    Parameters
+    ----------
+    chains : list of int arrays
+        Ordered particle indices of each strand.
+    closed : bool or sequence of bool
+        Whether each chain is a ring (a segment joins the last bead to the first).
+
+    Returns
+    -------
+    seg : (M, 2) int array
+        Bead indices (i0, i1) of each segment.
+    chain_id : (M,) int array
+    pos_in_chain : (M,) int array
+    chain_nseg : (M,) int array
+        Number of segments of the segment's chain.
+    ring : (M,) bool array
+    """
+    chains = [np.asarray(c, dtype=np.int64).ravel() for c in chains]
+    if np.ndim(closed) == 0:
+        closed = [bool(closed)] * len(chains)
+    if len(closed) != len(chains):
+        raise ValueError(f"closed: expected {len(chains)} flags, got {len(closed)}")
+    seg, cid, pos, nseg, ring = [], [], [], [], []
+    for k, (c, cl) in enumerate(zip(chains, closed)):
+        if len(c) < 2:
+            continue
+        s = np.stack([c[:-1], c[1:]], axis=1)
+        if cl and len(c) > 2:
+            s = np.vstack([s, [[c[-1], c[0]]]])
+        seg.append(s)
+        cid.append(np.full(len(s), k))
+        pos.append(np.arange(len(s)))
+        nseg.append(np.full(len(s), len(s)))
+        ring.append(np.full(len(s), bool(cl and len(c) > 2)))
+    if not seg:
+        e = np.zeros(0, np.int64)
+        return np.zeros((0, 2), np.int64), e, e, e, np.zeros(0, bool)
+    return (np.vstack(seg), np.concatenate(cid), np.concatenate(pos), np.concatenate(nseg),
+            np.concatenate(ring))
+
+
+def pair_allowed(a, b, chain_id, pos_in_chain, chain_nseg, ring, exclude_neighbours):
+    """Mask of segment pairs (a, b) that interact: different chains, or on the same chain
+    more than ``exclude_neighbours`` segments apart (cyclically on a ring)."""
+    same = chain_id[a] == chain_id[b]
+    sep = np.abs(pos_in_chain[a] - pos_in_chain[b])
+    sep = np.where(ring[a], np.minimum(sep, chain_nseg[a] - sep), sep)
+    return (~same) | (sep > exclude_neighbours)
+
+
+def pair_terms(pos, seg, a, b, kernel, q, r_cut=None):
+    """Energy (in units of alpha, i.e. nm) and gradient of Eq. (C1) over segment pairs (a, b).
+
+    Parameters
+    ----------
+    pos : (N, 3) float array, nm
+    seg : (M, 2) int array of segments
+    a, b : (P,) int arrays of segment indices (each unordered pair once)
+    kernel : ChiralKernel
+    q : int
+        Sample points per segment, at fractions (k + 1/2)/q.
+
+    Returns
+    -------
+    e : float
+        sum (l_a/q)(l_b/q) K G, in nm (multiply by alpha for the energy).
+    grad : (N, 3) float array
+        dE/dx in the same units (1; the force is -alpha grad).
+    """
+    pos = np.asarray(pos, float)
+    grad = np.zeros_like(pos)
+    if len(a) == 0:
+        return 0.0, grad
+    i0, i1 = seg[a, 0], seg[a, 1]
+    j0, j1 = seg[b, 0], seg[b, 1]
+    ea = pos[i1] - pos[i0]
+    eb = pos[j1] - pos[j0]
+    la = np.linalg.norm(ea, axis=1)
+    lb = np.linalg.norm(eb, axis=1)
+    ta = ea / la[:, None]
+    tb = eb / lb[:, None]
+    fr = (np.arange(q) + 0.5) / q
+    fk = np.repeat(fr, q)  # sample on a
+    fm = np.tile(fr, q)  # sample on b
+    npair = len(a)
+    # Pair-sample arrays, shape (P*q*q,): index p = pair, and fractions.
+    p = np.repeat(np.arange(npair), q * q)
+    fk = np.tile(fk, npair)
+    fm = np.tile(fm, npair)
+    r = (pos[j0][p] + fm[:, None] * eb[p]) - (pos[i0][p] + fk[:, None] * ea[p])
+    rn = np.linalg.norm(r, axis=1)
+    if r_cut is None:
+        r_cut = kernel.r_c
+    live = rn < r_cut
+    if not np.any(live):
+        return 0.0, grad
+    p, fk, fm, r, rn = p[live], fk[live], fm[live], r[live], rn[live]
+    d = r / rn[:, None]
+    tap, tbp = ta[p], tb[p]
+    cross = np.cross(tap, tbp)
+    c = np.einsum("ij,ij->i", tap, tbp)
+    s = np.einsum("ij,ij->i", cross, d)
+    K, dK = kernel.weight(rn)
+    G, dGc, dGs = kernel.angular(c, s)
+    w = (la[p] * lb[p]) / (q * q)
+    e = float(np.sum(w * K * G))
+    # dE/dr (vector r = p_b - p_a): via |r| (K) and via d (s = (ta x tb) . d).
+    ds_dd = cross
+    dE_dr = (w * dK * G)[:, None] * d + (w * K * dGs)[:, None] * (
+        (ds_dd - np.einsum("ij,ij->i", ds_dd, d)[:, None] * d) / rn[:, None])
+    # dE/dt_a and dE/dt_b at fixed lengths: dc/dta = tb, ds/dta = tb x d; dc/dtb = ta, ds/dtb = d x ta.
+    wk = (w * K)[:, None]
+    dE_dta = wk * (dGc[:, None] * tbp + dGs[:, None] * np.cross(tbp, d))
+    dE_dtb = wk * (dGc[:, None] * tap + dGs[:, None] * np.cross(d, tap))
+    # Per pair, sum over samples: t and l depend on e = x1 - x0 only.
+    Gt_a = np.zeros((npair, 3))
+    Gt_b = np.zeros((npair, 3))
+    np.add.at(Gt_a, p, dE_dta)
+    np.add.at(Gt_b, p, dE_dtb)
+    EKG = np.zeros(npair)
+    np.add.at(EKG, p, (K * G) / (q * q))  # dE/dl_a = lb * EKG, dE/dl_b = la * EKG
+    # de: dt/de = (I - t t^T)/l, dl/de = t.
+    dE_dea = (Gt_a - np.einsum("ij,ij->i", Gt_a, ta)[:, None] * ta) / la[:, None] \
+        + (lb * EKG)[:, None] * ta
+    dE_deb = (Gt_b - np.einsum("ij,ij->i", Gt_b, tb)[:, None] * tb) / lb[:, None] \
+        + (la * EKG)[:, None] * tb
+    np.add.at(grad, i0, -dE_dea)
+    np.add.at(grad, i1, dE_dea)
+    np.add.at(grad, j0, -dE_deb)
+    np.add.at(grad, j1, dE_deb)
+    # r = pb - pa, pa = (1-fk) x_i0 + fk x_i1, pb = (1-fm) x_j0 + fm x_j1.
+    pi0, pi1, pj0, pj1 = i0[p], i1[p], j0[p], j1[p]
+    np.add.at(grad, pi0, -(1.0 - fk)[:, None] * dE_dr)
+    np.add.at(grad, pi1, -fk[:, None] * dE_dr)
+    np.add.at(grad, pj0, (1.0 - fm)[:, None] * dE_dr)
+    np.add.at(grad, pj1, fm[:, None] * dE_dr)
+    return e, grad
+
+
+def default_subdivisions(bead_spacing_nm, delta_nm, debye_nm):
+    """Sample points per segment so that the sample spacing b/q <= 1.6 sqrt(Delta lambda_D).
+
+    Along a partner strand the weight is close to a Gaussian of width w = sqrt(Delta lambda_D)
+    in the offset u; a sum over samples spaced by h reproduces the integral to
+    ~2 exp(-2 pi^2 w^2 / h^2) (Poisson summation), <= 1e-3 for h <= 1.6 w, so the energy
+    carries (almost) no corrugation from how the beads of two strands line up.
+    """
+    width = 1.6 * math.sqrt(float(delta_nm) * float(debye_nm))
+    return max(1, math.ceil(float(bead_spacing_nm) / width - 1e-9))
+
+
+def chiral_energy_forces(positions_nm, chains, alpha_pN, *, delta_nm, debye_nm,
+                         exclude_neighbours, subdivisions=1, closed=False,
+                         cutoff_debye=CUTOFF_DEBYE, switch_debye=SWITCH_DEBYE,
+                         eta_on_rad=ETA_ON):
+    """Chiral energy (pN nm) and forces (pN) by brute force over all segment pairs.
+
+    Parameters
+    ----------
+    positions_nm : (N, 3) array, nm
+    chains : list of int arrays
+        Ordered bead indices of each strand.
+    alpha_pN : float
+        alpha, energy per unit contact length (pN nm / nm = pN). alpha > 0 favours eta < 0,
+        i.e. right-handed braids (docs/chirality.md).
+    delta_nm, debye_nm : float
+        Effective diameter and Debye length.
+    exclude_neighbours : int
+        Segments on the same chain at most this many segments apart do not interact.
+    subdivisions : int
+        Sample points per segment (q in Eq. C1).
+    closed : bool or sequence of bool
+        Ring chains.
+
+    Returns
+    -------
+    energy_pN_nm : float
+    forces_pN : (N, 3) float array
+    """
+    pos = np.asarray(positions_nm, float)
+    kernel = ChiralKernel(delta_nm, debye_nm, cutoff_debye=cutoff_debye,
+                          switch_debye=switch_debye, eta_on_rad=eta_on_rad)
+    seg, cid, pic, nseg, ring = segments_of(chains, closed)
+    a, b = np.triu_indices(len(seg), 1)
+    keep = pair_allowed(a, b, cid, pic, nseg, ring, int(exclude_neighbours))
+    e, g = pair_terms(pos, seg, a[keep], b[keep], kernel, int(subdivisions))
+    return float(alpha_pN) * e, -float(alpha_pN) * g

@@ -1,0 +1,178 @@
+"""Tweezer scenes end to end: worm-like chain, braid symmetry, catenation, outputs, resume.
+
+Statistical tests use fixed seeds and tolerances built from the run's own standard errors
+(autocorrelation-corrected): |sim - theory| < Z_TOL x SEM + a named model tolerance.
+"""
+
+import json
+import math
+import os
+
+import numpy as np
+import pytest
+
+from dnabraid.analysis.geometry import bending_cosines
+from dnabraid.build import build
+from dnabraid.continuum.wlc import discrete_wlc_extension
+from dnabraid.engine import Engine, SimulationBlowUp
+from dnabraid.runner import run_scene
+from dnabraid.scene import make_scene
+
+#: |simulation - theory| must be below Z_TOL standard errors of the mean ...
+Z_TOL = 4.0
+#: ... plus this fraction of the theory value (Euler-Maruyama bias at the default step,
+#: excluded volume, first-order treatment of bond stretching in the theory).
+MODEL_RTOL = 0.01
+
+
+def discrete_theory(s):
+    m = build(s)
+    p = m.params
+    return discrete_wlc_extension(s.force_pN, s.n_beads - 1, s.bead_spacing_nm, p["kappa_kT"],
+                                  p["kT_pN_nm"], stretch_k_pN_per_nm=p["k_bond_pN_per_nm"])
+
+
+# The slowest mode of a tether is the pivot of the whole chain about its surface hinge:
+# tau ~ zeta b^2 N^3 / (3 F L) (measured ~1e6 steps for 100 nm at 1 pN). Fast tests use
+# short chains at forces where many tau fit in a minute; the long ones are marked slow.
+@pytest.mark.parametrize("force, length, steps", [
+    (3.0, 25.0, 600_000),
+    (10.0, 50.0, 600_000),
+    pytest.param(0.1, 20.0, 12_000_000, marks=pytest.mark.slow),
+    pytest.param(1.0, 100.0, 40_000_000, marks=pytest.mark.slow),
+    pytest.param(10.0, 300.0, 20_000_000, marks=pytest.mark.slow),
+])
+def test_tether_matches_discrete_wlc(tmp_path, force, length, steps):
+    s = make_scene("tether", {"force_pN": force, "length_nm": length, "steps": steps,
+                              "equilibration_steps": 20_000, "surface": False, "seed": 7,
+                              "frame_interval": 10_000})
+    summ = run_scene(s, str(tmp_path / "run"))
+    ext = summ["points"][0]["extension_nm"]
+    theory = discrete_theory(s)["extension_nm"]
+    err = abs(ext["mean"] - theory)
+    tol = Z_TOL * ext["sem"] + MODEL_RTOL * theory
+    assert err < tol, f"F={force}: sim {ext['mean']:.2f}+-{ext['sem']:.2f} vs {theory:.2f} nm"
+    # the SEM must be meaningful: sampling covers many correlation times
+    assert ext["n_eff"] > 20
+
+
+def test_persistence_from_bending_cosines(tmp_path):
+    """<cos beta> between consecutive bonds gives lp = -b / ln<cos beta> = 50 nm (F -> 0.05 pN)."""
+    s = make_scene("tether", {"force_pN": 0.05, "length_nm": 100.0, "steps": 200_000,
+                              "equilibration_steps": 10_000, "surface": False, "seed": 3,
+                              "frame_interval": 500})
+    run_scene(s, str(tmp_path / "run"))
+    from dnabraid.protocols import PointResult
+
+    ck = [f for f in os.listdir(tmp_path / "run" / "checkpoints") if f.startswith("point")]
+    frames = PointResult.load(str(tmp_path / "run" / "checkpoints" / ck[0])).frames
+    cos = np.array([bending_cosines(f).mean() for f in frames])
+    from dnabraid.analysis.stats import mean_sem
+
+    r = mean_sem(cos)
+    lp = -s.bead_spacing_nm / math.log(r["mean"])
+    dlp = s.bead_spacing_nm * r["sem"] / (r["mean"] * math.log(r["mean"]) ** 2)
+    # the force aligns bonds a little: bias (F b / kT)^2 / kappa ~ 1e-4 relative, negligible
+    assert abs(lp - s.persistence_nm) < Z_TOL * dlp + 0.01 * s.persistence_nm, (lp, dlp)
+
+
+@pytest.fixture(scope="module")
+def braid_run(tmp_path_factory):
+    out = tmp_path_factory.mktemp("braid") / "run"
+    s = make_scene("braid", {"length_nm": 150.0, "tether_separation_nm": 30.0,
+                             "turns": [-2, 0, 2], "steps": 150_000,
+                             "equilibration_steps": 30_000, "seed": 11})
+    return s, str(out), run_scene(s, str(out))
+
+
+def test_braid_symmetric_at_zero_chirality(braid_run):
+    s, out, summ = braid_run
+    pts = {p["turns"]: p for p in summ["points"]}
+    zp, zm = pts[2.0]["extension_nm"], pts[-2.0]["extension_nm"]
+    dz = zp["mean"] - zm["mean"]
+    assert abs(dz) < Z_TOL * math.hypot(zp["sem"], zm["sem"]) + 0.01 * zp["mean"], (zp, zm)
+    tp, tm = pts[2.0]["torque_pN_nm"], pts[-2.0]["torque_pN_nm"]
+    assert abs(tp["mean"] + tm["mean"]) < Z_TOL * math.hypot(tp["sem"], tm["sem"]) + 2.0
+    # braiding shortens the molecule pair and costs torque of the sign of the turns
+    assert zp["mean"] < pts[0.0]["extension_nm"]["mean"] - 5 * zp["sem"]
+
+
+def test_catenation_follows_turns(braid_run):
+    s, out, summ = braid_run
+    for p in summ["points"]:
+        # catenation = bead angle / 2 pi exactly (no passage); the bead lags the trap by
+        # torque / K: |lag| < 200 pN nm / 20000 pN nm / 2 pi < 0.002 turns
+        assert p["catenation"]["mean"] == pytest.approx(p["turns"], abs=0.01)
+
+
+def test_run_directory_is_self_describing(braid_run):
+    import MDAnalysis as mda
+
+    from dnabraid.analysis.geometry import catenation_number
+
+    s, out, summ = braid_run
+    for f in ("scene.toml", "topology.pdb", "trajectory.dcd", "observables.csv", "summary.json",
+              "extension_torque.png"):
+        assert os.path.getsize(os.path.join(out, f)) > 0
+    js = json.load(open(os.path.join(out, "summary.json")))
+    for key in ("wall_time_s", "platform", "time_step_ps", "points"):
+        assert key in js
+    p0 = js["points"][0]
+    for key in ("turns", "extension_nm", "torque_pN_nm", "catenation"):
+        assert key in p0
+    assert set(p0["extension_nm"]) >= {"mean", "sem"}
+    u = mda.Universe(os.path.join(out, "topology.pdb"), os.path.join(out, "trajectory.dcd"))
+    n_frames = sum(p["n_frames"] for p in js["points"])
+    assert u.trajectory.n_frames == n_frames
+    a = u.select_atoms("chainID A")
+    b = u.select_atoms("chainID B")
+    assert len(a) == len(b) == s.n_beads
+    u.trajectory[-1]
+    ca = catenation_number(a.positions / 10.0, b.positions / 10.0)
+    assert ca == pytest.approx(2.0, abs=0.05)  # last frame belongs to turns = +2 (sorted)
+    header = open(os.path.join(out, "observables.csv")).readline()
+    assert "extension_nm" in header and "torque_pN_nm" in header
+
+
+def test_resume_skips_finished_points(braid_run, tmp_path):
+    s, out, summ = braid_run
+    import shutil
+
+    copy = tmp_path / "copy"
+    shutil.copytree(out, copy)
+    ck = copy / "checkpoints"
+    victim = sorted(f for f in os.listdir(ck) if f.startswith("point"))[-1]  # turns = +2
+    os.remove(ck / victim)
+    kept = {f: os.path.getmtime(ck / f) for f in os.listdir(ck) if f.startswith("point")}
+    summ2 = run_scene(s, str(copy))
+    for f, t in kept.items():
+        assert os.path.getmtime(ck / f) == t  # not rerun
+    assert os.path.exists(ck / victim)
+    old = {p["turns"]: p for p in summ["points"]}
+    new = {p["turns"]: p for p in summ2["points"]}
+    assert new[0.0]["extension_nm"]["mean"] == old[0.0]["extension_nm"]["mean"]
+    assert new[2.0]["catenation"]["mean"] == pytest.approx(2.0, abs=0.01)
+
+
+def test_resume_refuses_a_different_scene(braid_run):
+    from dnabraid.scene import SceneError
+
+    s, out, summ = braid_run
+    other = make_scene("braid", {"length_nm": 150.0, "tether_separation_nm": 30.0,
+                                 "turns": [-2, 0, 2], "force_pN": 3.0})
+    with pytest.raises(SceneError, match="force_pN"):
+        run_scene(other, out)
+
+
+def test_blow_up_names_step_and_term(tmp_path):
+    s = make_scene("braid", {"length_nm": 100.0, "tether_separation_nm": 20.0})
+    m = build(s)
+    e = Engine(m, seed=1)
+    e.minimise()
+    e.integrator.setStepSize(e.integrator.getStepSize() * 40)  # far past stability
+    with pytest.raises(SimulationBlowUp) as exc:
+        for _ in range(200):
+            e.advance(50, str(tmp_path))
+    msg = str(exc.value)
+    assert "step" in msg and exc.value.term in m.forces
+    assert exc.value.saved and os.path.exists(exc.value.saved)

@@ -1,0 +1,129 @@
+"""Cost of the chiral term per Brownian step against a bonds + bending + WCA force field.
+
+Two strands of n beads each (n = 50, 200, 800; bead spacing 3 nm) start as a right-handed
+two-ply (eta = -30 deg) at the 150 mM effective diameter; OpenMM CPU platform, Threads=1,
+BrownianIntegrator. For each size we time (a) bonds + bending + WCA, (b) the same plus the
+chiral PythonForce, and report the chiral term's cost as (b) - (a) per step. The table is
+printed and written to workflows/results/benchmark_chiral.txt.
+
+Usage: python workflows/benchmark_chiral.py [--steps 2000]
+"""
+
+from __future__ import annotations
+
+import argparse
+import itertools
+import math
+import pathlib
+import platform
+import time
+
+import numpy as np
+import openmm
+from openmm import unit as u
+
+from dnabraid.forcefield import salt_parameters
+from dnabraid.forces.chiral import chiral_force
+from dnabraid.forces.reference_chiral import default_subdivisions
+from dnabraid.units import PN_NM_IN_KJ_MOL, kT
+
+B_NM = 3.0
+ETA = math.radians(-30.0)
+SALT_MM = 150.0
+
+
+def two_ply(n, delta, b=B_NM, eta=ETA):
+    R = 0.5 * delta
+    th = 0.5 * abs(eta)
+    pitch = R / math.tan(th)
+    ph = np.arange(n) * b / math.hypot(R, pitch)
+    x = np.stack([R * np.cos(ph), R * np.sin(ph), pitch * ph], 1)  # right-handed
+    y = x.copy()
+    y[:, :2] *= -1
+    return np.vstack([x, y]), [np.arange(n), n + np.arange(n)]
+
+
+def base_system(pos, chains, delta):
+    n = len(pos)
+    kt = kT(298.15) * PN_NM_IN_KJ_MOL
+    s = openmm.System()
+    for _ in range(n):
+        s.addParticle(1000.0)
+    bonds = openmm.HarmonicBondForce()
+    ang = openmm.CustomAngleForce("kappa*(1+cos(theta))")
+    ang.addGlobalParameter("kappa", 50.0 / B_NM * kt)
+    for c in chains:
+        for i, j in itertools.pairwise(c):
+            bonds.addBond(int(i), int(j), B_NM, 500.0)
+        for i, j, k in zip(c[:-2], c[1:-1], c[2:]):
+            ang.addAngle(int(i), int(j), int(k), [])
+    wca = openmm.CustomNonbondedForce(
+        "step(rc-r)*(4*eps*(sr6*sr6-sr6)+eps); sr6=(sigma/r)^6")
+    wca.addGlobalParameter("eps", kt)
+    wca.addGlobalParameter("sigma", delta)
+    wca.addGlobalParameter("rc", 2 ** (1 / 6) * delta)
+    wca.setNonbondedMethod(openmm.CustomNonbondedForce.CutoffNonPeriodic)
+    wca.setCutoffDistance(2.5 * delta)
+    for _ in range(n):
+        wca.addParticle([])
+    for c in chains:
+        for i, j in itertools.pairwise(c):
+            wca.addExclusion(int(i), int(j))
+        for i, j in zip(c[:-2], c[2:]):
+            wca.addExclusion(int(i), int(j))
+    for f in (bonds, ang, wca):
+        s.addForce(f)
+    return s
+
+
+def time_steps(system, pos, steps):
+    integ = openmm.BrownianIntegrator(298.15 * u.kelvin, 1.0 / u.picosecond, 0.5 * u.picosecond)
+    integ.setRandomNumberSeed(1)
+    plat = openmm.Platform.getPlatformByName("CPU")
+    ctx = openmm.Context(system, integ, plat, {"Threads": "1"})
+    ctx.setPositions(pos * u.nanometer)
+    integ.step(50)  # warm up
+    t0 = time.perf_counter()
+    integ.step(steps)
+    dt = (time.perf_counter() - t0) / steps
+    return dt, ctx
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--steps", type=int, default=2000)
+    ap.add_argument("--out", default=str(pathlib.Path(__file__).parent / "results"
+                                         / "benchmark_chiral.txt"))
+    args = ap.parse_args(argv)
+    sp = salt_parameters(SALT_MM)
+    delta, lam = sp.diameter_nm, sp.debye_nm
+    qdef = default_subdivisions(B_NM, delta, lam)
+    rows = []
+    for n in (50, 200, 800):
+        pos, chains = two_ply(n, delta)
+        t_base, _ = time_steps(base_system(pos, chains, delta), pos, args.steps)
+        for q in sorted({1, qdef}):
+            s = base_system(pos, chains, delta)
+            f = chiral_force(chains, 1.0, delta_nm=delta, debye_nm=lam, bead_spacing_nm=B_NM,
+                             subdivisions=q)
+            s.addForce(f)
+            t_all, _ = time_steps(s, pos, args.steps)
+            rows.append((2 * n, q, t_base * 1e6, t_all * 1e6, (t_all - t_base) * 1e6,
+                         (t_all - t_base) / t_base))
+    head = (f"# chiral term cost per BrownianIntegrator step, OpenMM {openmm.__version__} CPU "
+            f"platform Threads=1, {platform.processor() or platform.machine()}\n"
+            f"# 150 mM: Delta = {delta:.2f} nm, lambda_D = {lam:.3f} nm, b = {B_NM} nm, "
+            f"two-ply eta = -30 deg, {args.steps} steps; q = sample points per segment "
+            f"(default rule now gives q = {qdef})\n"
+            f"{'beads':>6} {'q':>3} {'base_us':>9} {'base+chiral_us':>15} {'chiral_us':>10}"
+            f" {'chiral/base':>12}\n")
+    body = "".join(f"{r[0]:>6d} {r[1]:>3d} {r[2]:>9.1f} {r[3]:>15.1f} {r[4]:>10.1f} {r[5]:>12.2f}\n"
+                   for r in rows)
+    print(head + body, end="")
+    out = pathlib.Path(args.out)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    out.write_text(head + body)
+
+
+if __name__ == "__main__":
+    main()
