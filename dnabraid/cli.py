@@ -2,6 +2,7 @@
 
     dnabraid run [SCENE | SCENE.toml] [--set KEY=VALUE]... [--out DIR] [--platform NAME] [--seed N]
     dnabraid scenes
+    dnabraid sweep SPEC.toml [--workers N] [--scheduler ADDRESS] [--out DIR]
     dnabraid continuum ply|knot|overhand|tweezer [options] [--json]
 """
 
@@ -92,6 +93,42 @@ def cmd_run(args) -> int:
     return 0
 
 
+def cmd_sweep(args) -> int:
+    from tqdm import tqdm
+
+    from . import sweep as swp
+
+    spec = swp.load_spec(args.spec, out=args.out)  # validates every point before any run
+    print(f"dnabraid sweep: {len(spec.points)} points of scene '{spec.points[0].scene.scene}' "
+          f"-> {spec.out}" + (f" on Dask scheduler {args.scheduler}" if args.scheduler else ""),
+          file=sys.stderr)
+    bar = tqdm(total=len(spec.points), unit="point", desc="sweep", disable=args.quiet,
+               dynamic_ncols=True)
+
+    def progress(rec):
+        bar.update(1)
+        if rec["status"] == "failed":
+            bar.write(f"point {rec['name']} failed: {rec['error']['type']}: "
+                      f"{rec['error']['message']}", file=sys.stderr)
+
+    try:
+        res = swp.run_sweep(spec, workers=args.workers, scheduler=args.scheduler,
+                            platform=args.platform, progress=progress)
+    except ConnectionError as exc:
+        print(f"dnabraid: error: {exc}", file=sys.stderr)
+        return 2
+    finally:
+        bar.close()
+    print(swp.format_table(res.rows, list(spec.grid)))
+    print(f"wall time {res.wall_time_s:.1f} s; table {res.table}"
+          + (f", figure {res.figure}" if res.figure else ""))
+    if res.failed:
+        print(f"{len(res.failed)} of {len(spec.points)} points failed (errors in "
+              f"{os.path.join(res.out, swp.STATUS_FILE)}); rerun to retry them", file=sys.stderr)
+        return 1
+    return 0
+
+
 def cmd_continuum(args) -> int:
     from .continuum import cli as ccli
 
@@ -119,6 +156,18 @@ def build_parser() -> argparse.ArgumentParser:
     r.add_argument("--seed", type=int, default=None, help="random seed")
     r.add_argument("--quiet", action="store_true", help="no progress bar")
     r.set_defaults(func=cmd_run)
+    w = sub.add_parser("sweep", help="run a scene over a grid of key values (SPEC.toml)",
+                       description="Run every point of a sweep spec (TOML: scene, [fixed], "
+                       "[grid]); finished points are skipped, interrupted ones resume.")
+    w.add_argument("spec", help="sweep spec (TOML)")
+    w.add_argument("--workers", type=int, default=None,
+                   help="local worker processes (default: usable cores)")
+    w.add_argument("--scheduler", default=None, metavar="ADDRESS",
+                   help="run on a Dask cluster (needs the 'distributed' extra)")
+    w.add_argument("--out", default=None, help="sweep directory (default: the spec's out)")
+    w.add_argument("--platform", default="CPU", help="OpenMM platform of every point")
+    w.add_argument("--quiet", action="store_true", help="no progress bar")
+    w.set_defaults(func=cmd_sweep)
     s = sub.add_parser("scenes", help="list built-in scenes and their keys")
     s.set_defaults(func=cmd_scenes)
     try:
@@ -140,7 +189,7 @@ def main(argv=None) -> int:
     logging.basicConfig(level=logging.WARNING, format="%(levelname)s %(name)s: %(message)s")
     try:
         return args.func(args)
-    except (scn.SceneError, FileNotFoundError, ValueError) as exc:
+    except (scn.SceneError, FileNotFoundError, ValueError, ImportError) as exc:
         print(f"dnabraid: error: {exc}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:

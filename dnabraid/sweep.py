@@ -473,7 +473,10 @@ def _run_dask(spec, todo, scheduler, platform, done) -> None:
         raise ImportError("running a sweep on a Dask cluster needs dask.distributed: "
                           "pip install 'dnabraid[distributed]'") from exc
     own = not isinstance(scheduler, Client)
-    client = Client(scheduler) if own else scheduler
+    try:
+        client = Client(scheduler) if own else scheduler
+    except OSError as exc:
+        raise ConnectionError(f"cannot reach the Dask scheduler {scheduler!r}: {exc}") from exc
     try:
         futs = {}
         for p in todo:
