@@ -663,6 +663,9 @@ def sweep_plot(spec: SweepSpec, rows: list[dict], path: str) -> str | None:
         ax2.axhline(0, color="0.7", lw=0.8)
         ns = sorted({a["n"] for a in asym})
         ax2.set_xlabel(xkey)
+        xs = [a[xkey] for a in asym]
+        if xkey == "salt_mM" and min(xs) > 0 and max(xs) >= 10 * min(xs):
+            ax2.set_xscale("log")
         ax2.set_ylabel(f"z(+n) - z(-n) (nm), n = {', '.join(f'{n:g}' for n in ns)}")
         if any(g for g in groups):
             ax2.legend(fontsize=7, frameon=False)
@@ -720,14 +723,14 @@ def analyse_sweep(sweep_dir: str, *, crossing_cutoff_nm: float | None = None,
             continue
         with open(files[2]) as fh:
             summary = json.load(fh)
-        with warnings.catch_warnings():  # bead atoms have no chemical element
-            warnings.filterwarnings("ignore", message="Unknown element", category=UserWarning)
+        with warnings.catch_warnings():  # beads have no element or mass; DCD reader notes
+            warnings.filterwarnings("ignore", module="MDAnalysis")
             u = mda.Universe(files[0], files[1])
-        s1, s2 = select_strands(u)
-        cutoff = crossing_cutoff_nm or 2.0 * summary["effective_diameter_nm"]
-        ext = Extension(s1).run()
-        cat = Catenation(s1, s2).run()
-        cross = CrossingAngles(s1, s2, cutoff_nm=cutoff).run()
+            s1, s2 = select_strands(u)
+            cutoff = crossing_cutoff_nm or 2.0 * summary["effective_diameter_nm"]
+            ext = Extension(s1).run()
+            cat = Catenation(s1, s2).run()
+            cross = CrossingAngles(s1, s2, cutoff_nm=cutoff).run()
         start = 0
         for pt in summary["points"]:
             nf = pt["n_frames"]
