@@ -18,6 +18,7 @@ import openmm
 import openmm.app as app
 
 from . import forcefield, units
+from .forces.chiral import chiral_force
 from .forces import (bead_exclusion_force, bending_force, pull_force, stretch_force, trap_force, wall_force,
                      wca_exclusions, wca_force)
 from .scene import Scene
@@ -167,6 +168,12 @@ def build(scene: Scene) -> Model:
                                  wall_k, name="beadwall"), "beadwall")
     else:
         add(pull_force(attachments, [1.0], scene.force_pN, name="pull"), "pull")
+    debye = forcefield.salt_parameters(scene.salt_mM).debye_nm
+    if scene.alpha != 0.0:
+        # Kornyshev chiral term between facing segments (docs/chirality.md); left out at
+        # alpha = 0. The immobile tether points take part like any other bead.
+        add(chiral_force(chains, scene.alpha, delta_nm=d, debye_nm=debye, bead_spacing_nm=b,
+                         name="chiral"), "chiral")
     params = {
         "kT_pN_nm": kT,
         "bead_center": bead_center,
@@ -180,6 +187,8 @@ def build(scene: Scene) -> Model:
         "zeta_bead_physical_pN_ns_per_nm": zeta_bead_phys,
         "wall_k_pN_per_nm": wall_k if scene.surface else 0.0,
         "n_exclusions": len(exclusions),
+        "debye_nm": debye,
+        "alpha_pN": scene.alpha,
     }
     params.update(stiffest_mode(scene, params))
     return Model(scene, system, topology, positions, chains, attachments, fixed, bonds,
@@ -208,11 +217,17 @@ def stiffest_mode(scene: Scene, p: dict) -> dict:
         "wca": 2.0 * 456.0 * kT / d**2 * mu,
         "wall": p["wall_k_pN_per_nm"] * mu,
     }
+    if scene.alpha != 0.0:
+        # The chiral weight K(r) ~ A/(1 + exp((r - Delta)/lambda_D)) with A ~ 1/(2 Delta):
+        # its curvature per unit alpha is at most ~0.1 A / lambda_D^2 per nm of partner,
+        # summed over the ~2 Delta of partner in range and over both segment ends.
+        lam = p["debye_nm"]
+        rates["chiral"] = abs(scene.alpha) * 0.1 / lam**2 * 4.0 * mu
     if scene.n_strands == 2:
         r = 0.5 * scene.tether_separation_nm
         rates["trap"] = 2 * scene.trap_stiffness_pN_nm / r**2 * mu_a
         rates["link"] = 3 * p["k_bond_pN_per_nm"] * mu_a
-    total = rates["stretch"] + rates["bend"] + rates["wca"]
+    total = rates["stretch"] + rates["bend"] + rates["wca"] + rates.get("chiral", 0.0)
     total = max(total, rates["wall"] + rates["stretch"], rates.get("trap", 0) + rates.get("link", 0))
     stiff = max(rates, key=rates.get)
     dt_ns = scene.timestep_safety * 2.0 / total

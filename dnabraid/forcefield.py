@@ -122,3 +122,35 @@ def bending_stiffness_kT(bead_spacing_nm: float, persistence_nm: float) -> float
         if hi / lo < 1 + 1e-14:
             break
     return math.sqrt(lo * hi)
+
+
+def chiral_parameters(salt_mM: float) -> dict:
+    """Chiral strength alpha (pN) and its bracket at ``salt_mM``, from ``chiral.toml``.
+
+    Log-linear interpolation in salt between the tabulated values; outside the table the
+    nearest entry is used and ``extrapolated`` is True. The range of the interaction is the
+    Debye length (:func:`debye_length_nm`), as in the table's ``range_nm``.
+
+    Returns
+    -------
+    dict with ``alpha_pN``, ``alpha_min_pN``, ``alpha_max_pN``, ``range_nm``,
+    ``extrapolated`` and ``source``.
+    """
+    if not (isinstance(salt_mM, (int, float)) and math.isfinite(salt_mM) and salt_mM > 0):
+        raise ValueError(f"salt_mM must be a positive number (mM), got {salt_mM!r}")
+    table = sorted(((float(k), v) for k, v in load_toml("chiral.toml")["salt"].items()),
+                   key=lambda kv: kv[0])
+    cs = [c for c, _ in table]
+    out = {"range_nm": debye_length_nm(salt_mM), "extrapolated": not cs[0] <= salt_mM <= cs[-1]}
+    keys = ("alpha_pN", "alpha_min_pN", "alpha_max_pN")
+    if salt_mM <= cs[0] or salt_mM >= cs[-1]:
+        entry = table[0][1] if salt_mM <= cs[0] else table[-1][1]
+        out.update({k: float(entry[k]) for k in keys}, source=entry["source"])
+        return out
+    for (c0, e0), (c1, e1) in zip(table[:-1], table[1:]):
+        if c0 <= salt_mM <= c1:
+            t = (math.log(salt_mM) - math.log(c0)) / (math.log(c1) - math.log(c0))
+            out.update({k: float(e0[k] + t * (e1[k] - e0[k])) for k in keys})
+            out["source"] = e0["source"] if t < 0.5 else e1["source"]
+            return out
+    raise AssertionError("unreachable")  # pragma: no cover

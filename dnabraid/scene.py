@@ -51,6 +51,9 @@ KEY_DOCS: dict[str, tuple[str, str]] = {
     "frame_interval": ("steps", "steps between trajectory frames (multiple of report_interval)"),
     "surface": ("", "true: a wall at z = 0 keeps DNA above the surface"),
     "timestep_safety": ("", "time step = safety x 2 / (mobility x largest stiffness)"),
+    "alpha": ("pN", "chiral strength alpha of phi = alpha tan(eta/2) (energy per contact length, "
+              "pN = pN nm/nm; 1 kT/nm = 4.11 pN); 0 = no chiral term; 'salt' = the estimate at "
+              "salt_mM from forcefields/chiral.toml; > 0 favours right-handed braids (n > 0)"),
 }
 
 _BRAID_KEYS = set(KEY_DOCS) - {"scene"}
@@ -93,6 +96,7 @@ class Scene:
     frame_interval: int = 5000
     surface: bool = True
     timestep_safety: float = 0.3
+    alpha: float = 0.0
 
     # -- derived ---------------------------------------------------------------
     @property
@@ -274,6 +278,13 @@ def make_scene(base: str | os.PathLike = "braid", overrides: dict | None = None)
         raise SceneError(
             f"unknown key(s) {', '.join(unknown)} for scene {kind!r}; allowed keys: "
             + ", ".join(sorted(allowed)))
+    if isinstance(values.get("alpha"), str):
+        if values["alpha"].strip().lower() != "salt":
+            raise SceneError(f"alpha (in pN): expected a number or 'salt', got {values['alpha']!r}")
+        salt = _coerce("salt_mM", values.get("salt_mM", Scene.salt_mM), "float")
+        if not salt > 0:
+            raise SceneError(f"salt_mM={salt!r} mM: salt must be > 0 mM")
+        values["alpha"] = forcefield.chiral_parameters(salt)["alpha_pN"]
     coerced = {k: _coerce(k, v, _FIELD_TYPES[k]) for k, v in values.items()}
     scene = Scene(scene=kind, **coerced)
     validate(scene)
@@ -347,6 +358,9 @@ def validate(s: Scene) -> None:
     need(0 < s.turn_rate <= 0.01, "turn_rate", "must be in (0, 0.01] turns per step")
     need(0 < s.timestep_safety <= 0.9, "timestep_safety", "must be in (0, 0.9]")
     need(s.seed >= 0, "seed", "must be >= 0")
+    need(abs(s.alpha) <= 50.0, "alpha",
+         "|alpha| must be <= 50 pN (~12 kT/nm; literature estimates are 0.01-1.5 pN, "
+         "forcefields/chiral.toml)")
     if s.scene == "tether":
         need(all(t == 0 for t in s.turns), "turns",
              "a nicked single tether cannot hold turns; use turns=[0]")
