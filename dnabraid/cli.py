@@ -93,16 +93,19 @@ def cmd_run(args) -> int:
     return 0
 
 
-def cmd_sweep(args) -> int:
+def run_sweep_verbose(spec, *, workers=None, scheduler=None, platform="CPU", quiet=False):
+    """Run a validated sweep with a progress bar over points and print its table.
+
+    Returns the :class:`dnabraid.sweep.SweepResult` (also used by workflows/*.py).
+    """
     from tqdm import tqdm
 
     from . import sweep as swp
 
-    spec = swp.load_spec(args.spec, out=args.out)  # validates every point before any run
     print(f"dnabraid sweep: {len(spec.points)} points of scene '{spec.points[0].scene.scene}' "
-          f"-> {spec.out}" + (f" on Dask scheduler {args.scheduler}" if args.scheduler else ""),
+          f"-> {spec.out}" + (f" on Dask scheduler {scheduler}" if scheduler else ""),
           file=sys.stderr)
-    bar = tqdm(total=len(spec.points), unit="point", desc="sweep", disable=args.quiet,
+    bar = tqdm(total=len(spec.points), unit="point", desc="sweep", disable=quiet,
                dynamic_ncols=True)
 
     def progress(rec):
@@ -112,11 +115,8 @@ def cmd_sweep(args) -> int:
                       f"{rec['error']['message']}", file=sys.stderr)
 
     try:
-        res = swp.run_sweep(spec, workers=args.workers, scheduler=args.scheduler,
-                            platform=args.platform, progress=progress)
-    except ConnectionError as exc:
-        print(f"dnabraid: error: {exc}", file=sys.stderr)
-        return 2
+        res = swp.run_sweep(spec, workers=workers, scheduler=scheduler, platform=platform,
+                            progress=progress)
     finally:
         bar.close()
     print(swp.format_table(res.rows, list(spec.grid)))
@@ -125,8 +125,20 @@ def cmd_sweep(args) -> int:
     if res.failed:
         print(f"{len(res.failed)} of {len(spec.points)} points failed (errors in "
               f"{os.path.join(res.out, swp.STATUS_FILE)}); rerun to retry them", file=sys.stderr)
-        return 1
-    return 0
+    return res
+
+
+def cmd_sweep(args) -> int:
+    from . import sweep as swp
+
+    spec = swp.load_spec(args.spec, out=args.out)  # validates every point before any run
+    try:
+        res = run_sweep_verbose(spec, workers=args.workers, scheduler=args.scheduler,
+                                platform=args.platform, quiet=args.quiet)
+    except ConnectionError as exc:
+        print(f"dnabraid: error: {exc}", file=sys.stderr)
+        return 2
+    return 1 if res.failed else 0
 
 
 def cmd_continuum(args) -> int:
