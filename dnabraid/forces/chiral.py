@@ -31,6 +31,7 @@ See workflows/benchmark_chiral.py for measured costs.
 
 from __future__ import annotations
 
+import importlib.util
 import math
 
 import numpy as np
@@ -47,7 +48,8 @@ from .reference_chiral import (
     segments_of,
 )
 
-__all__ = ["ChiralEvaluator", "chiral_force", "default_exclusion", "grid_pairs"]
+__all__ = ["HAVE_NUMBA", "ChiralEvaluator", "chiral_force", "default_exclusion", "grid_pairs",
+           "pair_terms_fast", "pair_terms_numba"]
 
 # The 13 half-shell neighbour offsets plus the home cell (handled with i < j).
 _HALF_SHELL = [(dx, dy, dz) for dx in (-1, 0, 1) for dy in (-1, 0, 1) for dz in (-1, 0, 1)
@@ -189,6 +191,259 @@ def pair_terms_fast(pos, seg, a, b, kernel, q):
     return e, grad
 
 
+# ---------------------------------------------------------------------------------------------
+# Compiled path. The two functions below are plain Python (readable, and runnable as such on a
+# few pairs); _jit() compiles them with numba on first use, cached on disk (cache=True), so
+# numba is imported only when a chiral force is first evaluated. The numpy pair_terms_fast
+# stays the fallback without numba; both are tested against the twin.
+# ---------------------------------------------------------------------------------------------
+
+
+def _pair_loop(pos, seg, a, b, q, delta, debye, amplitude, r_s, r_c, eta_on, ncoef, scale,
+               out):
+    """Eq. (C1) over candidate segment pairs, one pair and sample point at a time.
+
+    Computes what :func:`pair_terms_fast` computes for the pairs (a, b) that pass the
+    midpoint filter |m_b - m_a| < r_c + (l_a + l_b)/2 (the others have no sample points
+    within r_c), with K(r) and G(c, s) of
+    :class:`~dnabraid.forces.reference_chiral.ChiralKernel` written out inline.
+
+    Parameters
+    ----------
+    pos : (N, 3) float64 array, nm
+    seg : (M, 2) int64 array
+    a, b : (P,) int64 arrays of candidate segment pairs
+    q : int
+        Sample points per segment.
+    delta, debye, amplitude, r_s, r_c, eta_on : float
+        Kernel parameters (ChiralKernel attributes of the same names).
+    ncoef : (D,) float64 array
+        N(eta) = polyval(ncoef, eta^2).
+    scale : float
+        The gradient is added to ``out`` times ``scale`` (1: dE/dx; -alpha: forces).
+    out : (N, 3) float64 array
+        Accumulator, written in place.
+
+    Returns
+    -------
+    e : float
+        Energy per unit alpha (nm), not scaled.
+    """
+    inv_sw = 1.0 / (r_c - r_s)
+    half_pi = 0.5 * math.pi
+    inv_ang = 1.0 / (half_pi - eta_on)
+    nd = ncoef.shape[0]
+    inv_q = 1.0 / q
+    inv_q2 = inv_q * inv_q
+    e_tot = 0.0
+    for p in range(a.shape[0]):
+        i0 = seg[a[p], 0]
+        i1 = seg[a[p], 1]
+        j0 = seg[b[p], 0]
+        j1 = seg[b[p], 1]
+        xa0 = pos[i0, 0]
+        xa1 = pos[i0, 1]
+        xa2 = pos[i0, 2]
+        xb0 = pos[j0, 0]
+        xb1 = pos[j0, 1]
+        xb2 = pos[j0, 2]
+        ea0 = pos[i1, 0] - xa0
+        ea1 = pos[i1, 1] - xa1
+        ea2 = pos[i1, 2] - xa2
+        eb0 = pos[j1, 0] - xb0
+        eb1 = pos[j1, 1] - xb1
+        eb2 = pos[j1, 2] - xb2
+        la = math.sqrt(ea0 * ea0 + ea1 * ea1 + ea2 * ea2)
+        lb = math.sqrt(eb0 * eb0 + eb1 * eb1 + eb2 * eb2)
+        # midpoint filter: no sample point of a is within r_c of one of b otherwise
+        m0 = (xb0 + 0.5 * eb0) - (xa0 + 0.5 * ea0)
+        m1 = (xb1 + 0.5 * eb1) - (xa1 + 0.5 * ea1)
+        m2 = (xb2 + 0.5 * eb2) - (xa2 + 0.5 * ea2)
+        lim = r_c + 0.5 * (la + lb)
+        if m0 * m0 + m1 * m1 + m2 * m2 >= lim * lim:
+            continue
+        ta0 = ea0 / la
+        ta1 = ea1 / la
+        ta2 = ea2 / la
+        tb0 = eb0 / lb
+        tb1 = eb1 / lb
+        tb2 = eb2 / lb
+        c = ta0 * tb0 + ta1 * tb1 + ta2 * tb2
+        if not abs(c) > 1e-12:
+            continue  # G = 0 for every sample point (eta undefined)
+        cr0 = ta1 * tb2 - ta2 * tb1
+        cr1 = ta2 * tb0 - ta0 * tb2
+        cr2 = ta0 * tb1 - ta1 * tb0
+        w = la * lb * inv_q2
+        # per-pair accumulators: dE/dt_a, dE/dt_b, sum K G / q^2
+        gta0 = gta1 = gta2 = 0.0
+        gtb0 = gtb1 = gtb2 = 0.0
+        kg = 0.0
+        # gradient on the four beads from dE/dr
+        ga00 = ga01 = ga02 = ga10 = ga11 = ga12 = 0.0
+        gb00 = gb01 = gb02 = gb10 = gb11 = gb12 = 0.0
+        live = False
+        for k in range(q):
+            fk = (k + 0.5) * inv_q
+            pa0 = xa0 + fk * ea0
+            pa1 = xa1 + fk * ea1
+            pa2 = xa2 + fk * ea2
+            for m in range(q):
+                fm = (m + 0.5) * inv_q
+                r0 = (xb0 + fm * eb0) - pa0
+                r1 = (xb1 + fm * eb1) - pa1
+                r2 = (xb2 + fm * eb2) - pa2
+                rn = math.sqrt(r0 * r0 + r1 * r1 + r2 * r2)
+                if not rn < r_c:
+                    continue  # K = dK = 0 exactly
+                d0 = r0 / rn
+                d1 = r1 / rn
+                d2 = r2 / rn
+                s = cr0 * d0 + cr1 * d1 + cr2 * d2
+                # angular factor G(c, s), Eq. (C3): fold eta' = atan(s/c), switch S, N(eta')
+                eta = math.atan(s / c)
+                x = (abs(eta) - eta_on) * inv_ang
+                if x >= 1.0:
+                    continue  # S = 0: G = dG = 0
+                if x <= 0.0:
+                    sw = 1.0
+                    dsw = 0.0
+                else:
+                    sw = 1.0 - x * x * x * (10.0 - 15.0 * x + 6.0 * x * x)
+                    dsw = -30.0 * x * x * (1.0 - x) * (1.0 - x) * inv_ang
+                    if eta < 0.0:
+                        dsw = -dsw
+                if not sw > 0.0:
+                    continue
+                # distance weight K(r), Eq. (C1)-(C2): Fermi step times the C2 switch
+                f = 1.0 / (1.0 + math.exp((rn - delta) / debye))
+                df = -f * (1.0 - f) / debye
+                y = (rn - r_s) * inv_sw
+                if y <= 0.0:
+                    cs = 1.0
+                    dcs = 0.0
+                else:
+                    cs = 1.0 - y * y * y * (10.0 - 15.0 * y + 6.0 * y * y)
+                    dcs = -30.0 * y * y * (1.0 - y) * (1.0 - y) * inv_sw
+                K = amplitude * f * cs
+                dK = amplitude * (df * cs + f * dcs)
+                live = True
+                cos_e = math.cos(eta)
+                sq = math.sqrt(cos_e)
+                th = math.tan(0.5 * eta)
+                e2 = eta * eta
+                n = ncoef[0]
+                dn = 0.0
+                for t in range(1, nd):
+                    dn = dn * e2 + n
+                    n = n * e2 + ncoef[t]
+                dn = dn * 2.0 * eta
+                h = th * sq * sw / n
+                dh = (0.5 * (1.0 + th * th) * sq * sw
+                      - th * math.sin(eta) / (2.0 * sq) * sw
+                      + th * sq * dsw) / n - h * dn / n
+                G = (c * c + s * s) * h
+                dGc = 2.0 * c * h - s * dh
+                dGs = 2.0 * s * h + c * dh
+                wK = w * K
+                e_tot += wK * G
+                kg += K * G * inv_q2
+                # dE/dr = w dK G d + (w K dG/ds / |r|) (cr - s d)
+                u = w * dK * G
+                v = wK * dGs / rn
+                dr0 = u * d0 + v * (cr0 - s * d0)
+                dr1 = u * d1 + v * (cr1 - s * d1)
+                dr2 = u * d2 + v * (cr2 - s * d2)
+                # dE/dt_a = wK (dGc t_b + dGs t_b x d); dE/dt_b = wK (dGc t_a + dGs d x t_a)
+                gta0 += wK * (dGc * tb0 + dGs * (tb1 * d2 - tb2 * d1))
+                gta1 += wK * (dGc * tb1 + dGs * (tb2 * d0 - tb0 * d2))
+                gta2 += wK * (dGc * tb2 + dGs * (tb0 * d1 - tb1 * d0))
+                gtb0 += wK * (dGc * ta0 + dGs * (d1 * ta2 - d2 * ta1))
+                gtb1 += wK * (dGc * ta1 + dGs * (d2 * ta0 - d0 * ta2))
+                gtb2 += wK * (dGc * ta2 + dGs * (d0 * ta1 - d1 * ta0))
+                # r = p_b - p_a, p_a = (1 - fk) x_i0 + fk x_i1, p_b = (1 - fm) x_j0 + fm x_j1
+                ga00 -= (1.0 - fk) * dr0
+                ga01 -= (1.0 - fk) * dr1
+                ga02 -= (1.0 - fk) * dr2
+                ga10 -= fk * dr0
+                ga11 -= fk * dr1
+                ga12 -= fk * dr2
+                gb00 += (1.0 - fm) * dr0
+                gb01 += (1.0 - fm) * dr1
+                gb02 += (1.0 - fm) * dr2
+                gb10 += fm * dr0
+                gb11 += fm * dr1
+                gb12 += fm * dr2
+        if not live:
+            continue
+        # t and l depend on e = x1 - x0 only: dt/de = (I - t t^T)/l, dl/de = t
+        pa = gta0 * ta0 + gta1 * ta1 + gta2 * ta2
+        pb = gtb0 * tb0 + gtb1 * tb1 + gtb2 * tb2
+        da0 = (gta0 - pa * ta0) / la + lb * kg * ta0
+        da1 = (gta1 - pa * ta1) / la + lb * kg * ta1
+        da2 = (gta2 - pa * ta2) / la + lb * kg * ta2
+        db0 = (gtb0 - pb * tb0) / lb + la * kg * tb0
+        db1 = (gtb1 - pb * tb1) / lb + la * kg * tb1
+        db2 = (gtb2 - pb * tb2) / lb + la * kg * tb2
+        out[i0, 0] += scale * (ga00 - da0)
+        out[i0, 1] += scale * (ga01 - da1)
+        out[i0, 2] += scale * (ga02 - da2)
+        out[i1, 0] += scale * (ga10 + da0)
+        out[i1, 1] += scale * (ga11 + da1)
+        out[i1, 2] += scale * (ga12 + da2)
+        out[j0, 0] += scale * (gb00 - db0)
+        out[j0, 1] += scale * (gb01 - db1)
+        out[j0, 2] += scale * (gb02 - db2)
+        out[j1, 0] += scale * (gb10 + db0)
+        out[j1, 1] += scale * (gb11 + db1)
+        out[j1, 2] += scale * (gb12 + db2)
+    return e_tot
+
+
+def _max_disp2(pos, ref):
+    """max_i |pos_i - ref_i|^2 (the Verlet-list rebuild test)."""
+    mx = 0.0
+    for i in range(pos.shape[0]):
+        d0 = pos[i, 0] - ref[i, 0]
+        d1 = pos[i, 1] - ref[i, 1]
+        d2 = pos[i, 2] - ref[i, 2]
+        d = d0 * d0 + d1 * d1 + d2 * d2
+        if d > mx:
+            mx = d
+    return mx
+
+
+#: numba is present (it is imported, and the kernels compiled, only on first use).
+HAVE_NUMBA = importlib.util.find_spec("numba") is not None
+_COMPILED = {}
+
+
+def _jit(fn):
+    """``numba.njit(cache=True)(fn)``, made once per process."""
+    k = _COMPILED.get(fn.__name__)
+    if k is None:
+        import numba
+
+        k = _COMPILED[fn.__name__] = numba.njit(cache=True, nogil=True)(fn)
+    return k
+
+
+def pair_terms_numba(pos, seg, a, b, kernel, q):
+    """Same result as :func:`pair_terms_fast` with the compiled loop (needs numba).
+
+    Pairs whose midpoints are farther apart than r_c + (l_a + l_b)/2 are skipped, which
+    changes nothing (they have no sample points within r_c).
+    """
+    pos = np.ascontiguousarray(pos, dtype=np.float64)
+    grad = np.zeros_like(pos)
+    e = _jit(_pair_loop)(pos, np.ascontiguousarray(seg, np.int64),
+                         np.ascontiguousarray(a, np.int64), np.ascontiguousarray(b, np.int64),
+                         int(q), kernel.delta, kernel.debye, kernel.amplitude, kernel.r_s,
+                         kernel.r_c, kernel.eta_on,
+                         np.ascontiguousarray(kernel.ncoef, np.float64), 1.0, grad)
+    return float(e), grad
+
+
 class ChiralEvaluator:
     """Picklable callable computing the chiral energy and forces for a PythonForce.
 
@@ -207,11 +462,18 @@ class ChiralEvaluator:
     skin_nm : float
     parameter : str
         Name of the global parameter holding alpha in kJ/mol/nm.
+    backend : {"auto", "numba", "numpy"}
+        "auto" (default): the compiled loop :func:`pair_terms_numba` where numba is
+        installed, else the numpy :func:`pair_terms_fast`.
     """
 
     def __init__(self, seg, chain_id, pos_in_chain, chain_nseg, ring, kernel,
-                 exclude_neighbours, subdivisions, skin_nm, parameter):
-        self.seg = np.asarray(seg, np.int64)
+                 exclude_neighbours, subdivisions, skin_nm, parameter, backend="auto"):
+        if backend not in ("auto", "numba", "numpy"):
+            raise ValueError(f"backend must be 'auto', 'numba' or 'numpy', got {backend!r}")
+        if backend == "numba" and not HAVE_NUMBA:
+            raise ImportError("backend='numba' needs the numba package (pip install numba)")
+        self.seg = np.ascontiguousarray(seg, np.int64)
         self.chain_id = np.asarray(chain_id)
         self.pos_in_chain = np.asarray(pos_in_chain)
         self.chain_nseg = np.asarray(chain_nseg)
@@ -221,16 +483,24 @@ class ChiralEvaluator:
         self.q = int(subdivisions)
         self.skin = float(skin_nm)
         self.parameter = parameter
+        self.backend = backend
         self.n_calls = 0
         self.n_builds = 0
         self._ref = None
+        self._kpar = None
         self._a = np.zeros(0, np.int64)
         self._b = np.zeros(0, np.int64)
 
     def __getstate__(self):
         st = self.__dict__.copy()
         st["_ref"] = None  # a copy starts with a fresh list
+        st["_kpar"] = None
         return st
+
+    def __setstate__(self, st):
+        st.setdefault("backend", "auto")  # pickles from before the compiled path
+        st["_kpar"] = None
+        self.__dict__.update(st)
 
     def _build(self, pos):
         x0, x1 = pos[self.seg[:, 0]], pos[self.seg[:, 1]]
@@ -247,16 +517,39 @@ class ChiralEvaluator:
         self._ref = pos.copy()
         self.n_builds += 1
 
+    @property
+    def uses_numba(self):
+        """Whether calls go through the compiled loop."""
+        return self.backend == "numba" or (self.backend == "auto" and HAVE_NUMBA)
+
     def candidate_pairs(self, pos):
         """Segment pairs (a, b) in the Verlet list, rebuilt if a bead moved > skin/2."""
-        if (self._ref is None or self._ref.shape != pos.shape
-                or np.max(np.sum((pos - self._ref) ** 2, axis=1)) > 0.25 * self.skin**2):
+        if self._ref is None or self._ref.shape != pos.shape:
             self._build(pos)
+        else:
+            if self.uses_numba:
+                moved2 = _jit(_max_disp2)(pos, self._ref)
+            else:
+                moved2 = np.max(np.sum((pos - self._ref) ** 2, axis=1))
+            if moved2 > 0.25 * self.skin**2:
+                self._build(pos)
         return self._a, self._b
+
+    def _compiled(self, pos, scale, out):
+        """Energy per unit alpha; adds scale * dE/dx to ``out`` (compiled path)."""
+        a, b = self.candidate_pairs(pos)
+        k = self.kernel
+        if self._kpar is None:
+            self._kpar = (k.delta, k.debye, k.amplitude, k.r_s, k.r_c, k.eta_on,
+                          np.ascontiguousarray(k.ncoef, np.float64))
+        return _jit(_pair_loop)(pos, self.seg, a, b, self.q, *self._kpar, scale, out)
 
     def energy_grad(self, pos):
         """(E, dE/dx) of Eq. (C1) per unit alpha: nm and dimensionless (N, 3)."""
-        pos = np.asarray(pos, float)
+        pos = np.ascontiguousarray(pos, dtype=np.float64)
+        if self.uses_numba:
+            grad = np.zeros_like(pos)
+            return float(self._compiled(pos, 1.0, grad)), grad
         a, b = self.candidate_pairs(pos)
         if len(a):
             x0, x1 = pos[self.seg[:, 0]], pos[self.seg[:, 1]]
@@ -270,8 +563,12 @@ class ChiralEvaluator:
 
     def __call__(self, state):
         self.n_calls += 1
-        pos = state.getPositions(asNumpy=True)._value  # nm
+        pos = np.ascontiguousarray(state.getPositions(asNumpy=True)._value, np.float64)  # nm
         alpha = state.getParameters()[self.parameter]  # kJ/mol/nm
+        if self.uses_numba:
+            force = np.zeros_like(pos)
+            e = self._compiled(pos, -alpha, force)
+            return alpha * e, force
         e, g = self.energy_grad(pos)
         return alpha * e, -alpha * g
 
@@ -279,7 +576,7 @@ class ChiralEvaluator:
 def chiral_force(chains, alpha_pN, *, delta_nm, debye_nm, exclude_neighbours=None,
                  bead_spacing_nm=None, subdivisions=None, closed=False, skin_nm=1.0,
                  cutoff_debye=CUTOFF_DEBYE, switch_debye=SWITCH_DEBYE, eta_on_rad=ETA_ON,
-                 name="chiral"):
+                 name="chiral", backend="auto"):
     """Chiral interaction alpha tan(eta/2) per unit contact length, as a named PythonForce.
 
     Parameters
@@ -313,6 +610,9 @@ def chiral_force(chains, alpha_pN, *, delta_nm, debye_nm, exclude_neighbours=Non
         Shape of the weight and of the angular switch (reference_chiral).
     name : str
         Force name; the global parameter ``<name>_alpha`` holds alpha in kJ/mol/nm.
+    backend : {"auto", "numba", "numpy"}
+        Evaluator of the pair terms (:class:`ChiralEvaluator`); "auto" takes numba when
+        installed.
 
     Returns
     -------
@@ -346,7 +646,7 @@ def chiral_force(chains, alpha_pN, *, delta_nm, debye_nm, exclude_neighbours=Non
                           switch_debye=switch_debye, eta_on_rad=eta_on_rad)
     parameter = f"{name}_alpha"
     evaluator = ChiralEvaluator(seg_local, cid, pic, nseg, ring, kernel, exclude_neighbours,
-                                subdivisions, skin_nm, parameter)
+                                subdivisions, skin_nm, parameter, backend=backend)
     force = openmm.PythonForce(evaluator, {parameter: alpha * PN_NM_IN_KJ_MOL})
     force.setParticles([int(p) for p in particles])
     force.setName(name)
