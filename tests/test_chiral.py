@@ -15,7 +15,15 @@ from openmm import unit as u
 
 from dnabraid import units
 from dnabraid.forcefield import load_toml
-from dnabraid.forces.chiral import ChiralEvaluator, chiral_force, grid_pairs, pair_terms_fast
+from dnabraid.forces.chiral import (
+    HAVE_NUMBA,
+    ChiralEvaluator,
+    _pair_loop,
+    chiral_force,
+    grid_pairs,
+    pair_terms_fast,
+    pair_terms_numba,
+)
 from dnabraid.forces.reference_chiral import (
     ChiralKernel,
     chiral_energy_forces,
@@ -83,32 +91,41 @@ def openmm_energy_forces(force, pos):
     return e, np.asarray(f)
 
 
+def all_pairs(chains, excl=3, closed=False):
+    seg, cid, pic, nseg, ring = segments_of(chains, closed)
+    a, b = np.triu_indices(len(seg), 1)
+    keep = pair_allowed(a, b, cid, pic, nseg, ring, excl)
+    return seg, a[keep], b[keep]
+
+
 def test_twin_against_finite_differences():
     rng = np.random.default_rng(SEED)
+    kern = ChiralKernel(DELTA, DEBYE)  # built once: chiral_energy_forces calibrates per call
     for _ in range(3):
         pos, chains = scene(rng, 10)
         e, f = chiral_energy_forces(pos, chains, 3.0, **KW)
         assert e != 0.0
+        seg, a, b = all_pairs(chains, KW["exclude_neighbours"])
         h = 1e-6
         fd = np.zeros_like(pos)
         for i in range(len(pos)):
             for k in range(3):
                 p = pos.copy()
                 p[i, k] += h
-                ep, _ = chiral_energy_forces(p, chains, 3.0, **KW)
+                ep = pair_terms(p, seg, a, b, kern, KW["subdivisions"])[0]
                 p[i, k] -= 2 * h
-                em, _ = chiral_energy_forces(p, chains, 3.0, **KW)
-                fd[i, k] = -(ep - em) / (2 * h)
+                em = pair_terms(p, seg, a, b, kern, KW["subdivisions"])[0]
+                fd[i, k] = -3.0 * (ep - em) / (2 * h)
         assert np.allclose(f, fd, rtol=1e-6, atol=1e-6 * np.abs(f).max())
 
 
-@pytest.mark.parametrize("q", [1, 3])
-def test_openmm_equals_twin(q):
+@pytest.mark.parametrize("q,backend", [(1, "auto"), (3, "auto"), (2, "numpy")])
+def test_openmm_equals_twin(q, backend):
     rng = np.random.default_rng(SEED + q)
     kw = dict(KW, subdivisions=q)
     for _ in range(3):
         pos, chains = scene(rng)
-        force = chiral_force(chains, 2.5, **kw)
+        force = chiral_force(chains, 2.5, backend=backend, **kw)
         assert force.getName() == "chiral"
         e, f = openmm_energy_forces(force, pos)
         er, fr = chiral_energy_forces(pos, chains, 2.5, **kw)
@@ -238,3 +255,92 @@ def test_alpha_zero_is_left_out_and_parameters_file():
     table = load_toml("chiral.toml")
     for key, entry in table["salt"].items():
         assert float(key) > 0 and entry["alpha_pN"] > 0 and entry["source"]
+
+
+# --- the compiled loop (numba) against the twin and the numpy evaluator --------------------
+
+
+def kernel_scenes(rng):
+    """Random walks (most pairs beyond the cutoff), a near-antiparallel pair of strands (the
+    fold: c close to -1), a near-perpendicular crossing (the angular switch) and an ideal
+    two-ply with one strand reversed."""
+    out = []
+    for _ in range(2):
+        out.append(scene(rng))
+    t = walk(rng, 12, 2.0) * 0.4
+    back = t[::-1] + np.array([DELTA, 0.0, 0.0]) + rng.normal(size=(12, 3)) * 0.3
+    out.append((np.vstack([t, back]), [np.arange(12), 12 + np.arange(12)]))
+    z = np.linspace(-15, 15, 11)
+    line1 = np.stack([z, 0 * z, 0 * z], 1)
+    ang = math.radians(88.0)
+    line2 = np.stack([z * math.cos(ang), z * math.sin(ang), np.full_like(z, DELTA)], 1)
+    out.append((np.vstack([line1, line2]) + rng.normal(size=(22, 3)) * 0.05,
+                [np.arange(11), 11 + np.arange(11)]))
+    pos, ch = two_ply(math.radians(-40), h=2.0, length=40.0)
+    out.append((pos, [ch[0], ch[1][::-1]]))
+    return out
+
+
+def compiled(pos, seg, a, b, kern, q, loop):
+    grad = np.zeros_like(pos)
+    e = loop(pos, seg, a, b, q, kern.delta, kern.debye, kern.amplitude, kern.r_s, kern.r_c,
+             kern.eta_on, kern.ncoef, 1.0, grad)
+    return e, grad
+
+
+def assert_same(e, g, er, gr):
+    assert e == pytest.approx(er, rel=1e-10, abs=1e-13)
+    assert np.allclose(g, gr, rtol=0.0, atol=1e-10 * max(np.abs(gr).max(), 1e-300))
+
+
+def test_loop_equals_twin_uncompiled():
+    """The loop as plain Python (what numba compiles) on a few pairs: runs without numba."""
+    rng = np.random.default_rng(SEED + 21)
+    kern = ChiralKernel(DELTA, DEBYE)
+    scenes = kernel_scenes(rng)
+    for q, (pos, chains) in zip((1, 2, 3), scenes[2:]):
+        seg, a, b = all_pairs(chains)
+        er, gr = pair_terms(pos, seg, a, b, kern, q)
+        assert er != 0.0
+        assert_same(*compiled(pos, seg, a, b, kern, q, _pair_loop), er, gr)
+
+
+@pytest.mark.skipif(not HAVE_NUMBA, reason="numba not installed")
+@pytest.mark.parametrize("q", [1, 2, 3])
+def test_numba_equals_twin_and_numpy(q):
+    rng = np.random.default_rng(SEED + 30 + q)
+    kern = ChiralKernel(DELTA, DEBYE)
+    for pos, chains in kernel_scenes(rng):
+        seg, a, b = all_pairs(chains)
+        er, gr = pair_terms(pos, seg, a, b, kern, q)
+        ef, gf = pair_terms_fast(pos, seg, a, b, kern, q)
+        en, gn = pair_terms_numba(pos, seg, a, b, kern, q)
+        assert er != 0.0
+        assert_same(en, gn, er, gr)
+        assert_same(en, gn, ef, gf)
+        assert_same(ef, gf, er, gr)
+    # the folded (antiparallel) scene: reversing a strand leaves energy and forces unchanged
+    pos, chains = kernel_scenes(rng)[-1]
+    seg, a, b = all_pairs(chains)
+    seg2, a2, b2 = all_pairs([chains[0][::-1], chains[1]])
+    assert_same(*pair_terms_numba(pos, seg2, a2, b2, kern, q),
+                *pair_terms_numba(pos, seg, a, b, kern, q))
+
+
+@pytest.mark.skipif(not HAVE_NUMBA, reason="numba not installed")
+def test_numba_evaluator_equals_numpy_evaluator_under_motion():
+    """Same Verlet list, same energies and forces along a random path; __call__ via OpenMM."""
+    rng = np.random.default_rng(SEED + 40)
+    chains = [np.arange(30), 30 + np.arange(30), 60 + np.arange(20)]
+    pos = np.vstack([walk(rng, 30, 2.5), walk(rng, 30, 2.5), walk(rng, 20, 2.5)]) * 0.6
+    seg, cid, pic, nseg, ring = segments_of(chains, closed=[False, False, True])
+    kern = ChiralKernel(DELTA, DEBYE)
+    ev = {k: ChiralEvaluator(seg, cid, pic, nseg, ring, kern, 3, 2, 1.0, "x", backend=k)
+          for k in ("numpy", "numba")}
+    assert ev["numba"].uses_numba and not ev["numpy"].uses_numba
+    for _ in range(15):
+        pos = pos + rng.normal(size=pos.shape) * 0.15
+        assert_same(*ev["numba"].energy_grad(pos), *ev["numpy"].energy_grad(pos))
+    assert ev["numba"].n_builds == ev["numpy"].n_builds > 1
+    with pytest.raises(ValueError):
+        ChiralEvaluator(seg, cid, pic, nseg, ring, kern, 3, 2, 1.0, "x", backend="cuda")
