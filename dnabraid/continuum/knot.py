@@ -39,18 +39,23 @@ trapezoid weight ``1/2`` at ``w = 0``) and ``v'(W) ~ (v_N - v_{N-1}) / dw``.  Th
 constraint is then the simple bound ``rho_i >= 1`` and the winding number is fixed by the
 continuity of ``psi`` (checked at the end).  The discrete problem is solved by
 
-1. a primal log-barrier (interior-point) Newton method on the coarsest grid
-   (``dw ~ 0.02``; banded Cholesky, shifted when the Hessian is indefinite),
+1. a primal log-barrier (interior-point) Newton method (``mu = 1e-2 dw ... 1e-9 dw``,
+   banded Cholesky, shifted when the Hessian is indefinite) on the coarsest grid
+   (``dw ~ 0.02``),
 2. a primal-dual active-set ("crossover") Newton iteration that fixes ``rho = 1`` on the
-   contact set and updates it from the signs of the multipliers and gaps, which gives the
-   exact discrete KKT point, and
-3. mesh halving with interpolation of the previous solution and of its contact set
-   (continuation), up to the requested grid.
+   contact set and updates it from the signs of the multipliers and gaps (one node at a
+   time once a cycle is detected), which gives the exact discrete KKT point, and
+3. mesh halving: the previous solution is interpolated and steps 1-2 rerun with a warm
+   barrier (``mu`` from ``1e-5 dw``), up to the requested grid.
 
 The discrete Lagrange multiplier ``lambda_i = dE/drho_i`` on the contact set is the contact
 force on node ``i`` (force density times ``dw``).  The discretisation error is first order in
-``dw`` (point forces sit on nodes); ``solve_knot`` therefore also reports the Richardson
-extrapolation ``2 f(dw) - f(2 dw)`` of the last two meshes (``extrapolate=True``).
+``dw``: point contacts can only sit on nodes, so one that falls between two nodes is carried
+by both.  It is a smooth trend (``w_c`` about ``+0.1 dw``) plus an oscillation of similar
+size with the position of the nodes relative to the contact points.  Positions of point
+contacts are the force-weighted mean of the nodes carrying them.  ``extrapolate=True``
+reports the two-mesh Richardson value; ``solve_knot_averaged`` averages over node phases
+first; ``convergence_table`` uses nested meshes, on which the phases stay nearly frozen.
 
 Contact force (Eq. 8's sigma)
 -----------------------------
@@ -69,16 +74,22 @@ contact region and at the isolated contacts) included.  On the half grid (node 0
 
 Numbers (trefoil; this module vs seed 002)
 ------------------------------------------
-Extrapolated from ``dw = 0.005, 0.0025`` (see ``convergence_table``): ``w_c = 3.5057``
-(seed 3.506), central contact ``|w| < 0.349`` (0.348), largest gap ``0.0214`` (0.021) at
-``w = 1.822`` (1.823), isolated contact at ``2.681`` (2.681), ``sigma = 0.4924`` (0.492).
+First-order Richardson extrapolation of nested meshes ``dw = 0.005, 0.0025`` (see
+``convergence_table``; a phase-averaged estimate, ``solve_knot_averaged``, agrees to 1e-4):
+``w_c = 3.5057`` (seed 3.506), central contact ``|w| < 0.3497`` (seed 0.348: 0.0017 apart,
+the only number not reproduced to the printed digits), largest gap ``0.0214`` (0.021) at
+``w = 1.8223`` (1.823), isolated contact at ``2.6813`` (2.681), ``sigma = 0.4925`` (0.492).
+A single solve at the default ``dw = 0.005`` is within 6e-4 of these (2e-3 for the contact
+half-width).  The central contact carries a density ``f ~ 0.24`` plus a point force 0.17
+at each end; the isolated contact a point force 0.44 (``int f dw = 1.393``).
 
 **Cinquefoil.**  Seed 002 prints ``w_c = 7.640``, seed 001 (Jawed et al.) quotes 7.60.  The
-converged difference problem gives ``w_c = 7.636`` (extrapolated; 7.6375 at ``dw = 0.01``), so
-the seed-002 value is the right one to its printed digits (within 0.004); 7.60 is off by
-0.036, about nine times more.  For ``n >= 2`` the solution is, to within 1e-3, the trefoil's
-shifted by ``4.13 (n - 1)`` with ``n - 1`` extra helical turns in contact at the centre:
-``w_c ~ 3.506 + 4.131 (n - 1)``.
+converged difference problem gives ``w_c = 7.640 +- 0.001`` (7.6388, 7.6407, 7.6398, 7.6402
+on nested meshes ``dw = 0.02 ... 0.0025``, phase means 7.6402 and 7.6407 at 0.02 and 0.01),
+so the seed-002 value is right and 7.60 is 0.04 too small.  For ``n >= 2`` the solution is
+the trefoil's shifted by ``4.135 (n - 1)`` with ``n - 1`` extra helical turns in contact at
+the centre: ``w_c = 3.506 + 4.135 (n - 1)`` (11.775 for ``n = 3``, 15.910 for ``n = 4``),
+``sigma = 0.492 + 0.975 (n - 1)``, same gap 0.021 and same point forces.
 
 Tension-radius law (Eqs. 1, 7-9)
 --------------------------------
@@ -108,9 +119,9 @@ SEED_TREFOIL = {"w_c": 3.506, "contact_half_width": 0.348, "max_gap": 0.021,
                 "max_gap_at": 1.823, "isolated_contact_at": 2.681, "sigma": 0.492}
 #: Apparent-crossing abscissa of the trefoil, seed 002 (Eq. 7 and text).
 W_C_TREFOIL = 3.506
-#: Cinquefoil ``w_c`` printed in seed 002 (confirmed by this module: 7.636 converged).
+#: Cinquefoil ``w_c`` printed in seed 002 (confirmed by this module: 7.640 +- 0.001).
 W_C_CINQUEFOIL = 7.640
-#: Cinquefoil ``w_c`` quoted in seed 001 (Jawed et al.); 0.036 off the converged value.
+#: Cinquefoil ``w_c`` quoted in seed 001 (Jawed et al.); 0.04 below the converged value.
 W_C_CINQUEFOIL_SEED001 = 7.60
 #: Total contact force constant of the trefoil, seed 002 (Eq. 8).
 SIGMA_TREFOIL = 0.492
@@ -119,7 +130,7 @@ DEFAULT_SPACING = 0.005
 #: Coarsest mesh of the continuation ladder (barrier solve).
 COARSE_SPACING = 0.02
 #: Shift of the solution per extra crossing pair (n -> n+1), measured; used for guesses.
-_SHIFT_PER_N = 4.13
+_SHIFT_PER_N = 4.135
 _BW = 5  # half bandwidth of the interleaved (rho, psi) Hessian
 
 
@@ -145,8 +156,8 @@ def turning_angle(n: int) -> float:
 
 
 def estimated_contact_end(n: int) -> float:
-    """Rough abscissa of the last (isolated) contact, ``2.68 + 4.13 (n - 1)``."""
-    return 2.68 + _SHIFT_PER_N * (_check_n(n) - 1)
+    """Abscissa of the last (isolated) contact, ``2.681 + 4.135 (n - 1)`` (measured)."""
+    return 2.681 + _SHIFT_PER_N * (_check_n(n) - 1)
 
 
 def minimum_half_width(n: int) -> float:
@@ -155,7 +166,10 @@ def minimum_half_width(n: int) -> float:
 
 
 def default_half_width(n: int) -> float:
-    """Default ``W``: 1.5 past the estimated ``w_c`` (results do not depend on it)."""
+    """Default ``W``: 1.5 past the estimated ``w_c`` (results do not depend on it).
+
+    ``w_c(n) ~ 3.506 + 4.135 (n - 1)`` (measured; 3.506 trefoil, 7.640 cinquefoil).
+    """
     return 3.506 + _SHIFT_PER_N * (_check_n(n) - 1) + 1.5
 
 
@@ -301,12 +315,12 @@ def _newton(grid: _Grid, y, fixed, mu: float, *, gtol: float, xtol: float,
         gn = float(np.max(np.abs(g))) / h
         if gn < gtol:
             return _Newton(y, gn, it, True)
-        for j in fixed_idx:  # identity rows/columns for frozen unknowns
-            ab[:, j] = 0.0
+        if fixed_idx.size:  # identity rows/columns for frozen unknowns
+            ab[:, fixed_idx] = 0.0
             for k in range(1, _BW + 1):
-                if j + k < y.size:
-                    ab[_BW - k, j + k] = 0.0
-            ab[_BW, j] = 1.0
+                cols = fixed_idx[fixed_idx + k < y.size] + k
+                ab[_BW - k, cols] = 0.0
+            ab[_BW, fixed_idx] = 1.0
         shift = 0.0
         scale = float(np.max(np.abs(ab[_BW])))
         for _ in range(30):
@@ -328,7 +342,7 @@ def _newton(grid: _Grid, y, fixed, mu: float, *, gtol: float, xtol: float,
             if m.any():
                 amax = min(1.0, 0.99 * float(np.min(-r[m] / dr[m])))
         f0 = phi(y)
-        alpha, accepted = amax, False
+        alpha, accepted, roundoff = amax, False, False
         while alpha > 1e-10:
             yn = y + alpha * d
             f1 = phi(yn)
@@ -336,23 +350,26 @@ def _newton(grid: _Grid, y, fixed, mu: float, *, gtol: float, xtol: float,
                 accepted = True
                 break
             if abs(f1 - f0) <= 1e-13 * (1.0 + abs(f0)) and abs(dec) <= 1e-11 * (1.0 + abs(f0)):
-                accepted = True  # round-off regime: the energy cannot resolve the step
+                accepted = roundoff = True  # the energy cannot resolve the step any more
                 break
             alpha *= 0.5
         if not accepted:
             return _Newton(y, gn, it, False)
         y = yn
-        if alpha * float(np.max(np.abs(d))) < xtol and shift == 0.0:
+        if shift == 0.0 and (roundoff or alpha * float(np.max(np.abs(d))) < xtol):
             return _Newton(y, gn, it + 1, True)
     return _Newton(y, gn, maxit, False)
 
 
-def _barrier(grid: _Grid, y, fixed0, xtol: float):
-    """Interior-point phase: ``mu = 1e-2 dw ... 1e-9 dw``; returns ``y`` and a contact guess."""
+def _barrier(grid: _Grid, y, fixed0, xtol: float, warm: bool = False):
+    """Interior-point phase: ``mu = 1e-2 dw ... 1e-9 dw``; returns ``y`` and a contact guess.
+
+    ``warm``: the guess is already close (previous mesh): start at ``mu = 1e-5 dw``.
+    """
     h = grid.h
     y = y.copy()
-    y[0::2] = np.maximum(y[0::2], 1.0 + 1e-3)
-    mu = 1e-2 * h
+    y[0::2] = np.maximum(y[0::2], 1.0 + (1e-4 if warm else 1e-3))
+    mu = (1e-5 if warm else 1e-2) * h
     its = 0
     while mu >= 1e-9 * h * 0.999:
         res = _newton(grid, y, fixed0, mu, gtol=1e-7, xtol=xtol)
@@ -370,6 +387,8 @@ def _active_set(grid: _Grid, y, active, fixed0, xtol: float, max_outer: int = 60
     its = 0
     newton_ok = False
     lam = np.zeros(grid.N + 1)
+    seen = set()
+    conservative = False
     for outer in range(max_outer):
         fixed = fixed0.copy()
         fixed[0::2] = active
@@ -379,6 +398,15 @@ def _active_set(grid: _Grid, y, active, fixed0, xtol: float, max_outer: int = 60
         g, _, _ = grid.grad(y)
         lam, rho = g[0::2], y[0::2]
         new = np.where(active, lam > 0.0, rho < 1.0)
+        key = np.packbits(active).tobytes()
+        if key in seen:  # cycling: from now on release one node at a time
+            conservative = True
+        seen.add(key)
+        if conservative and not np.array_equal(new, active):
+            release = active & (lam <= 0.0)
+            if release.any():
+                new = active | (rho < 1.0)
+                new[int(np.argmin(np.where(release, lam, np.inf)))] = False
         if np.array_equal(new, active):
             lam = np.where(active, lam, 0.0)
             g[fixed] = 0.0
@@ -475,32 +503,15 @@ def _from_solution(sol: dict, n: int, w):
 
 
 # --------------------------------------------------------------------------- solver
-def _solve_mesh(n, N, W, y_guess, active_guess, xtol):
+def _solve_mesh(n, N, W, y_guess, warm, xtol):
     grid = _Grid(N, W / N)
     fixed0 = np.zeros(2 * (N + 1), dtype=bool)
     fixed0[1] = True  # psi(0) = 0 (u even, v odd)
     y = y_guess.copy()
     y[1] = 0.0
-    its = 0
-    if active_guess is None:
-        y, active_guess, its = _barrier(grid, y, fixed0, xtol)
-    else:
-        y[0::2] = np.maximum(y[0::2], 1.0)
+    y, active_guess, its = _barrier(grid, y, fixed0, xtol, warm=warm)
     y, lam, active, ok, it2, kkt, outer = _active_set(grid, y, active_guess, fixed0, xtol)
     return grid, y, lam, active, ok, its + it2, kkt, outer
-
-
-def _interp_active(w_old, active_old, w_new):
-    """Contact set on a new grid: nodes inside the old clusters (+- one old spacing / 2)."""
-    h_old = w_old[1] - w_old[0]
-    act = np.zeros(w_new.size, dtype=bool)
-    idx = np.where(active_old)[0]
-    if not idx.size:
-        return act
-    for c in np.split(idx, np.where(np.diff(idx) > 1)[0] + 1):
-        lo, hi = w_old[c[0]] - 0.5 * h_old, w_old[c[-1]] + 0.5 * h_old
-        act |= (w_new >= lo) & (w_new <= hi)
-    return act
 
 
 def solve_knot(n: int = 1, *, n_grid: int | None = None, half_width_W: float | None = None,
@@ -596,13 +607,11 @@ def solve_knot(n: int = 1, *, n_grid: int | None = None, half_width_W: float | N
                 rho, psi = _from_solution(sol_prev, n, w)
             y0 = np.empty(2 * (N + 1))
             y0[0::2], y0[1::2] = rho, psi
-            act0 = None
-            if sol_prev is not None and sol_prev["n"] == n:
-                act0 = _interp_active(sol_prev["w"], sol_prev["active"], w)
-            grid, y, lam, active, ok, its, kkt, outer = _solve_mesh(n, N, W, y0, act0, tol)
-            if act0 is not None and not ok:  # continuation failed: start afresh on this mesh
+            warm = sol_prev is not None and sol_prev["n"] == n
+            grid, y, lam, active, ok, its, kkt, outer = _solve_mesh(n, N, W, y0, warm, tol)
+            if warm and not ok:  # continuation failed: start afresh on this mesh
                 logger.debug("continuation on N=%d failed; restarting with the barrier", N)
-                grid, y, lam, active, ok, its, kkt, outer = _solve_mesh(n, N, W, y0, None, tol)
+                grid, y, lam, active, ok, its, kkt, outer = _solve_mesh(n, N, W, y0, False, tol)
             obs = _observables(grid, y, lam)
             u, v = grid.uv(y)
             sol_prev = {"n": n, "w": grid.w, "h": grid.h, "rho": y[0::2].copy(),
