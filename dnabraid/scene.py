@@ -1,6 +1,6 @@
 """Scenes: what is simulated, as frozen dataclasses that round-trip through TOML.
 
-A scene is built from a built-in name (``braid``, ``tether``) or a TOML file, then
+A scene is built from a built-in name (``braid``, ``tether``, ``plectoneme``) or a TOML file, then
 modified by flat ``KEY=VALUE`` overrides. Everything is validated here, at the entry
 point, and errors say which key, what was expected and what came.
 """
@@ -28,7 +28,7 @@ class SceneError(ValueError):
 
 # Key metadata: name -> (unit, help). Defaults live on the dataclass.
 KEY_DOCS: dict[str, tuple[str, str]] = {
-    "scene": ("", "scene kind: braid | tether"),
+    "scene": ("", "scene kind: braid | tether | plectoneme"),
     "force_pN": ("pN", "constant force pulling the magnetic bead up (> 0)"),
     "turns": ("turns", "list of bead turn values n (catenation imposed by the rotational trap)"),
     "salt_mM": ("mM", "monovalent salt; sets the effective DNA diameter (Stigter 1977)"),
@@ -54,10 +54,17 @@ KEY_DOCS: dict[str, tuple[str, str]] = {
     "alpha": ("pN", "chiral strength alpha of phi = alpha tan(eta/2) (energy per contact length, "
               "pN = pN nm/nm; 1 kT/nm = 4.11 pN); 0 = no chiral term; 'salt' = the estimate at "
               "salt_mM from forcefields/chiral.toml; > 0 favours right-handed braids (n > 0)"),
+    "twist_persistence_nm": ("nm", "twist persistence length C of torsionally constrained DNA "
+                             "(plectoneme scene; Moroz & Nelson 1997, Bryant et al. 2003: "
+                             "C ~ 100 nm; twist-stretch coupling is left out)"),
 }
 
-_BRAID_KEYS = set(KEY_DOCS) - {"scene"}
+_BRAID_KEYS = set(KEY_DOCS) - {"scene", "twist_persistence_nm"}
 _TETHER_KEYS = _BRAID_KEYS - {"tether_separation_nm", "trap_stiffness_pN_nm", "turn_rate"}
+_PLECTONEME_KEYS = _TETHER_KEYS | {"trap_stiffness_pN_nm", "turn_rate", "twist_persistence_nm"}
+
+#: Scenes whose DNA is torsionally constrained (a frame per bond and a twist energy).
+TWISTED_SCENES = ("plectoneme",)
 
 
 def _default_turns():
@@ -70,7 +77,9 @@ class Scene:
 
     Defaults are for nicked DNA in 150 mM NaCl at 25 C. ``scene='braid'``: two nicked
     molecules between a surface and a magnetic bead, turned ``turns`` times;
-    ``scene='tether'``: one molecule, pulled, not turned.
+    ``scene='tether'``: one molecule, pulled, not turned; ``scene='plectoneme'``: one
+    torsionally constrained (un-nicked) molecule, pulled and turned (twist, writhe,
+    plectonemes).
     """
 
     scene: str = "braid"
@@ -97,6 +106,7 @@ class Scene:
     surface: bool = True
     timestep_safety: float = 0.3
     alpha: float = 0.0
+    twist_persistence_nm: float = 100.0
 
     # -- derived ---------------------------------------------------------------
     @property
@@ -107,6 +117,16 @@ class Scene:
     @property
     def n_strands(self) -> int:
         return 2 if self.scene == "braid" else 1
+
+    @property
+    def twisted(self) -> bool:
+        """True for torsionally constrained DNA (frames and a twist energy are built)."""
+        return self.scene in TWISTED_SCENES
+
+    @property
+    def turned(self) -> bool:
+        """True when the rotational trap turns the bead (braid, plectoneme)."""
+        return self.scene in ("braid", "plectoneme")
 
     @property
     def effective_diameter_nm(self) -> float:
@@ -140,18 +160,25 @@ def allowed_keys(kind: str) -> set:
         return set(_BRAID_KEYS)
     if kind == "tether":
         return set(_TETHER_KEYS)
-    raise SceneError(f"unknown scene {kind!r}; built-in scenes are: braid, tether")
+    if kind == "plectoneme":
+        return set(_PLECTONEME_KEYS)
+    raise SceneError(f"unknown scene {kind!r}; built-in scenes are: braid, tether, plectoneme")
 
 
 BUILTIN = {
     "braid": {},
     "tether": {"turns": [0.0], "force_pN": 1.0, "length_nm": 300.0},
+    "plectoneme": {"turns": [0.0, 1.0, 2.0, 3.0, 4.0, 5.0, 6.0], "force_pN": 1.0,
+                   "length_nm": 300.0},
 }
 
 SCENE_HELP = {
     "braid": "two nicked DNA molecules between a surface and a magnetic bead, braided by "
     "turning the bead: extension, torque and catenation against turns",
     "tether": "one nicked DNA molecule between surface and bead under force: force-extension",
+    "plectoneme": "one torsionally constrained DNA molecule between surface and bead under "
+    "force, turned n times: extension and torque against turns (the hat curve), buckling, "
+    "twist, writhe and plectonemes",
 }
 
 
@@ -367,7 +394,14 @@ def validate(s: Scene) -> None:
         need(len(s.turns) == 1, "turns", "a tether has one turn value, [0]")
     d = s.effective_diameter_nm
     barrier = passage_barrier_kT(s.bead_spacing_nm, d)
-    if s.n_strands == 2 or s.length_nm > 3 * s.persistence_nm:
+    if s.twisted:
+        need(s.twist_persistence_nm >= s.bead_spacing_nm, "twist_persistence_nm",
+             "must be >= bead_spacing_nm (a bead chain cannot resolve a shorter twist persistence)")
+        need(s.twist_persistence_nm <= 1000.0, "twist_persistence_nm",
+             "must be <= 1000 nm (DNA: ~100 nm)")
+    # a braid's strands, a long tether's loops and a plectoneme's branches must not pass
+    # through each other (for twisted DNA that would change the linking number)
+    if s.n_strands == 2 or s.twisted or s.length_nm > 3 * s.persistence_nm:
         need(barrier >= MIN_PASSAGE_BARRIER_KT, "bead_spacing_nm",
              f"too coarse for the effective DNA diameter {d:.2f} nm at {s.salt_mM} mM salt: "
              f"strands could pass through each other (barrier {barrier:.1f} kT < "
@@ -378,3 +412,10 @@ def validate(s: Scene) -> None:
         need(s.tether_separation_nm < s.length_nm, "tether_separation_nm",
              f"must be < length_nm={s.length_nm} (tethers farther apart than the strands are "
              "long cannot be bridged)")
+        # Lock-up (seed 000, slide 18): a two-ply of contact distance d = 2r cannot wind
+        # past theta = 45 deg; n = L sin(theta) / (2 pi r) turns of the whole length L is
+        # the most any braid of these molecules can hold.
+        n_lock = s.length_nm / (math.sqrt(2.0) * math.pi * d)
+        need(max(abs(t) for t in s.turns) <= n_lock, "turns",
+             f"|turns| must be <= {n_lock:.2f}: more turns than a {s.length_nm} nm braid of "
+             f"diameter {d:.2f} nm can hold at the 45-degree lock-up (L / (sqrt(2) pi d))")
