@@ -895,9 +895,9 @@ def cli_add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--half-width-W", type=float, default=None,
                         help="half length W of the rescaled domain (default: w_c + 1.5)")
     parser.add_argument("--tol", type=float, default=1e-10, help="Newton step tolerance")
-    parser.add_argument("--no-extrapolate", action="store_true",
-                        help="report the finest mesh's values instead of the Richardson "
-                             "extrapolation of the last two meshes")
+    parser.add_argument("--extrapolate", action="store_true",
+                        help="report the Richardson extrapolation of the last two meshes "
+                             "instead of the finest mesh's values")
 
 
 def cli_run(args) -> dict:
@@ -905,7 +905,7 @@ def cli_run(args) -> dict:
     res = solve_knot(args.n, n_grid=getattr(args, "n_grid", None),
                      half_width_W=getattr(args, "half_width_W", None),
                      tol=getattr(args, "tol", 1e-10),
-                     extrapolate=not getattr(args, "no_extrapolate", False))
+                     extrapolate=getattr(args, "extrapolate", False))
     out = {"problem": "knot_difference", **res.to_dict()}
     for key in ("w_c", "sigma", "contact_half_width", "max_gap", "max_gap_at",
                 "isolated_contact_at"):
