@@ -342,5 +342,8 @@ def test_numba_evaluator_equals_numpy_evaluator_under_motion():
         pos = pos + rng.normal(size=pos.shape) * 0.15
         assert_same(*ev["numba"].energy_grad(pos), *ev["numpy"].energy_grad(pos))
     assert ev["numba"].n_builds == ev["numpy"].n_builds > 1
+    # the compiled Verlet-list build finds the same pairs as grid_pairs + pair_allowed
+    pairs = {k: set(zip(e._a.tolist(), e._b.tolist())) for k, e in ev.items()}
+    assert pairs["numba"] == pairs["numpy"] and len(pairs["numba"]) > 100
     with pytest.raises(ValueError):
         ChiralEvaluator(seg, cid, pic, nseg, ring, kern, 3, 2, 1.0, "x", backend="cuda")

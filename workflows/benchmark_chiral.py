@@ -2,9 +2,15 @@
 
 Two strands of n beads each (n = 50, 200, 800; bead spacing 3 nm) start as a right-handed
 two-ply (eta = -30 deg) at the 150 mM effective diameter; OpenMM CPU platform, Threads=1,
-BrownianIntegrator. For each size we time (a) bonds + bending + WCA, (b) the same plus the
-chiral PythonForce, and report the chiral term's cost as (b) - (a) per step. The table is
-printed and written to workflows/results/benchmark_chiral.txt.
+BrownianIntegrator. For each size and q (sample points per segment: 1, the default rule at
+3 nm beads, and 2) we time (a) bonds + bending + WCA, (b) the same plus the chiral
+PythonForce with the numba evaluator and (c) with the numpy one (fewer steps), and report the
+chiral term's cost as (b) - (a) per step and relative to (a). The last two columns are the
+cost of one ``ChiralEvaluator.energy_grad`` call on the conformation reached by (b) (Verlet
+list already built), numpy and numba, outside OpenMM. The table is printed and written to
+workflows/results/benchmark_chiral.txt. Times are CPU time of this process
+(``time.process_time``), which other jobs on a shared machine disturb far less than wall
+time; pin it to one core (taskset -c 0).
 
 Usage: python workflows/benchmark_chiral.py [--steps 2000]
 """
@@ -23,8 +29,8 @@ import openmm
 from openmm import unit as u
 
 from dnabraid.forcefield import salt_parameters
-from dnabraid.forces.chiral import chiral_force
-from dnabraid.forces.reference_chiral import default_subdivisions
+from dnabraid.forces.chiral import HAVE_NUMBA, ChiralEvaluator, chiral_force, default_exclusion
+from dnabraid.forces.reference_chiral import ChiralKernel, default_subdivisions, segments_of
 from dnabraid.units import PN_NM_IN_KJ_MOL, kT
 
 B_NM = 3.0
@@ -83,10 +89,22 @@ def time_steps(system, pos, steps):
     ctx = openmm.Context(system, integ, plat, {"Threads": "1"})
     ctx.setPositions(pos * u.nanometer)
     integ.step(50)  # warm up
-    t0 = time.perf_counter()
+    t0 = time.process_time()
     integ.step(steps)
-    dt = (time.perf_counter() - t0) / steps
+    dt = (time.process_time() - t0) / steps
     return dt, ctx
+
+
+def per_call_us(evaluator, pos, calls=200, repeats=5):
+    """Best-of-``repeats`` mean time of one energy_grad call (us)."""
+    evaluator.energy_grad(pos)  # build the list (and compile/load numba)
+    best = np.inf
+    for _ in range(repeats):
+        t0 = time.process_time()
+        for _ in range(calls):
+            evaluator.energy_grad(pos)
+        best = min(best, (time.process_time() - t0) / calls)
+    return best * 1e6
 
 
 def main(argv=None):
@@ -98,26 +116,48 @@ def main(argv=None):
     sp = salt_parameters(SALT_MM)
     delta, lam = sp.diameter_nm, sp.debye_nm
     qdef = default_subdivisions(B_NM, delta, lam)
+    kernel = ChiralKernel(delta, lam)
+    backends = ("numba", "numpy") if HAVE_NUMBA else ("numpy",)
+    np_steps = max(50, args.steps // 10)
     rows = []
     for n in (50, 200, 800):
         pos, chains = two_ply(n, delta)
         t_base, _ = time_steps(base_system(pos, chains, delta), pos, args.steps)
-        for q in sorted({1, qdef}):
-            s = base_system(pos, chains, delta)
-            f = chiral_force(chains, 1.0, delta_nm=delta, debye_nm=lam, bead_spacing_nm=B_NM,
-                             subdivisions=q)
-            s.addForce(f)
-            t_all, _ = time_steps(s, pos, args.steps)
-            rows.append((2 * n, q, t_base * 1e6, t_all * 1e6, (t_all - t_base) * 1e6,
-                         (t_all - t_base) / t_base))
+        for q in sorted({1, qdef, 2}):
+            t_all, call = {}, {}
+            for be in backends:
+                s = base_system(pos, chains, delta)
+                s.addForce(chiral_force(chains, 1.0, delta_nm=delta, debye_nm=lam,
+                                        bead_spacing_nm=B_NM, subdivisions=q, backend=be))
+                t_all[be], ctx = time_steps(s, pos, args.steps if be == "numba" else np_steps)
+                if be == backends[0]:
+                    end = ctx.getState(getPositions=True).getPositions(asNumpy=True)._value
+            seg, cid, pic, nseg, ring = segments_of(chains)
+            excl = default_exclusion(B_NM, delta, lam)
+            for be in backends:
+                ev = ChiralEvaluator(seg, cid, pic, nseg, ring, kernel, excl, q, 1.0, "x",
+                                     backend=be)
+                call[be] = per_call_us(ev, np.asarray(end), calls=max(20, 20000 // n))
+            npairs = len(ev.candidate_pairs(np.asarray(end))[0])
+            t_nb = t_all.get("numba", np.nan)
+            rows.append((2 * n, q, npairs, t_base * 1e6, t_nb * 1e6, t_all["numpy"] * 1e6,
+                         (t_nb - t_base) * 1e6, (t_nb - t_base) / t_base,
+                         (t_all["numpy"] - t_base) / t_base,
+                         call["numpy"], call.get("numba", np.nan)))
     head = (f"# chiral term cost per BrownianIntegrator step, OpenMM {openmm.__version__} CPU "
             f"platform Threads=1, {platform.processor() or platform.machine()}\n"
             f"# 150 mM: Delta = {delta:.2f} nm, lambda_D = {lam:.3f} nm, b = {B_NM} nm, "
-            f"two-ply eta = -30 deg, {args.steps} steps; q = sample points per segment "
-            f"(default rule now gives q = {qdef})\n"
-            f"{'beads':>6} {'q':>3} {'base_us':>9} {'base+chiral_us':>15} {'chiral_us':>10}"
-            f" {'chiral/base':>12}\n")
-    body = "".join(f"{r[0]:>6d} {r[1]:>3d} {r[2]:>9.1f} {r[3]:>15.1f} {r[4]:>10.1f} {r[5]:>12.2f}\n"
+            f"two-ply eta = -30 deg, {args.steps} steps ({np_steps} with numpy); q = sample "
+            f"points per segment (default rule now gives q = {qdef}); pairs = Verlet-list "
+            f"candidates\n"
+            f"# CPU time per step (us): base = bonds + bending + WCA; +nb / +np = base + chiral"
+            f" with the numba / numpy evaluator; chiral_us = (+nb) - base; call_us: one"
+            f" energy_grad call\n"
+            f"{'beads':>6} {'q':>2} {'pairs':>6} {'base_us':>8} {'+nb_us':>8} {'+np_us':>8}"
+            f" {'chiral_us':>9} {'chiral/base':>11} {'np:chiral/base':>14}"
+            f" {'call_np_us':>10} {'call_nb_us':>10}\n")
+    body = "".join(f"{r[0]:>6d} {r[1]:>2d} {r[2]:>6d} {r[3]:>8.1f} {r[4]:>8.1f} {r[5]:>8.1f}"
+                   f" {r[6]:>9.1f} {r[7]:>11.2f} {r[8]:>14.2f} {r[9]:>10.1f} {r[10]:>10.1f}\n"
                    for r in rows)
     print(head + body, end="")
     out = pathlib.Path(args.out)

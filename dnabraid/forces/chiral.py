@@ -328,9 +328,13 @@ def _pair_loop(pos, seg, a, b, q, delta, debye, amplitude, r_s, r_c, eta_on, nco
                 K = amplitude * f * cs
                 dK = amplitude * (df * cs + f * dcs)
                 live = True
-                cos_e = math.cos(eta)
+                # cos, sin, tan(/2) of the folded angle from c and s (no more transcendentals)
+                rho2 = c * c + s * s
+                rho = math.sqrt(rho2)
+                cos_e = abs(c) / rho
+                sin_e = (s if c > 0.0 else -s) / rho
                 sq = math.sqrt(cos_e)
-                th = math.tan(0.5 * eta)
+                th = sin_e / (1.0 + cos_e)
                 e2 = eta * eta
                 n = ncoef[0]
                 dn = 0.0
@@ -340,9 +344,9 @@ def _pair_loop(pos, seg, a, b, q, delta, debye, amplitude, r_s, r_c, eta_on, nco
                 dn = dn * 2.0 * eta
                 h = th * sq * sw / n
                 dh = (0.5 * (1.0 + th * th) * sq * sw
-                      - th * math.sin(eta) / (2.0 * sq) * sw
+                      - th * sin_e / (2.0 * sq) * sw
                       + th * sq * dsw) / n - h * dn / n
-                G = (c * c + s * s) * h
+                G = rho2 * h
                 dGc = 2.0 * c * h - s * dh
                 dGs = 2.0 * s * h + c * dh
                 wK = w * K
@@ -398,6 +402,89 @@ def _pair_loop(pos, seg, a, b, q, delta, debye, amplitude, r_s, r_c, eta_on, nco
         out[j1, 1] += scale * (gb11 + db1)
         out[j1, 2] += scale * (gb12 + db2)
     return e_tot
+
+
+def _build_loop(pos, seg, chain_id, pos_in_chain, chain_nseg, ring, exclude, reach):
+    """Verlet list: segment pairs (a < b) with |m_b - m_a| < reach + (l_a + l_b)/2 that
+    :func:`~dnabraid.forces.reference_chiral.pair_allowed` admits.
+
+    The same grid hashing as :func:`grid_pairs` (cells of side reach + l_max, a sort of the
+    cell keys and a binary search per neighbour cell: O(M log M)), as one loop.
+
+    Returns
+    -------
+    a, b : (P,) int64 arrays
+    """
+    m = seg.shape[0]
+    mid = np.empty((m, 3))
+    ln = np.empty(m)
+    lmax = 0.0
+    for i in range(m):
+        s0 = 0.0
+        for k in range(3):
+            x0 = pos[seg[i, 0], k]
+            x1 = pos[seg[i, 1], k]
+            mid[i, k] = 0.5 * (x0 + x1)
+            s0 += (x1 - x0) * (x1 - x0)
+        ln[i] = math.sqrt(s0)
+        if ln[i] > lmax:
+            lmax = ln[i]
+    h = reach + lmax
+    lo3 = np.empty(3)
+    for k in range(3):
+        lo3[k] = mid[:, k].min()
+    cell = np.empty((m, 3), np.int64)
+    dims = np.zeros(3, np.int64)
+    for i in range(m):
+        for k in range(3):
+            c = np.int64(math.floor((mid[i, k] - lo3[k]) / h)) + 1  # one empty layer
+            cell[i, k] = c
+            if c + 2 > dims[k]:
+                dims[k] = c + 2
+    key = np.empty(m, np.int64)
+    for i in range(m):
+        key[i] = (cell[i, 0] * dims[1] + cell[i, 1]) * dims[2] + cell[i, 2]
+    order = np.argsort(key)
+    skey = key[order]
+    cap = 16 * m + 16
+    a = np.empty(cap, np.int64)
+    b = np.empty(cap, np.int64)
+    n = 0
+    for i in range(m):
+        for dx in range(-1, 2):
+            for dy in range(-1, 2):
+                for dz in range(-1, 2):
+                    ko = key[i] + (dx * dims[1] + dy) * dims[2] + dz
+                    lo = np.searchsorted(skey, ko)
+                    hi = np.searchsorted(skey, ko, side="right")
+                    for t in range(lo, hi):
+                        j = order[t]
+                        if j <= i:
+                            continue
+                        d2 = 0.0
+                        for k in range(3):
+                            d2 += (mid[j, k] - mid[i, k]) ** 2
+                        lim = reach + 0.5 * (ln[i] + ln[j])
+                        if not d2 < lim * lim:
+                            continue
+                        if chain_id[i] == chain_id[j]:
+                            sep = abs(pos_in_chain[i] - pos_in_chain[j])
+                            if ring[i]:
+                                sep = min(sep, chain_nseg[i] - sep)
+                            if sep <= exclude:
+                                continue
+                        if n == cap:
+                            cap *= 2
+                            a2 = np.empty(cap, np.int64)
+                            b2 = np.empty(cap, np.int64)
+                            a2[:n] = a[:n]
+                            b2[:n] = b[:n]
+                            a = a2
+                            b = b2
+                        a[n] = i
+                        b[n] = j
+                        n += 1
+    return a[:n].copy(), b[:n].copy()
 
 
 def _max_disp2(pos, ref):
@@ -478,6 +565,11 @@ class ChiralEvaluator:
         self.pos_in_chain = np.asarray(pos_in_chain)
         self.chain_nseg = np.asarray(chain_nseg)
         self.ring = np.asarray(ring, bool)
+        # contiguous int64 / bool copies for the compiled build
+        self._cid = np.ascontiguousarray(self.chain_id, np.int64)
+        self._pic = np.ascontiguousarray(self.pos_in_chain, np.int64)
+        self._nseg = np.ascontiguousarray(self.chain_nseg, np.int64)
+        self._ring = np.ascontiguousarray(self.ring, np.bool_)
         self.kernel = kernel
         self.exclude_neighbours = int(exclude_neighbours)
         self.q = int(subdivisions)
@@ -503,6 +595,13 @@ class ChiralEvaluator:
         self.__dict__.update(st)
 
     def _build(self, pos):
+        if self.uses_numba:
+            self._a, self._b = _jit(_build_loop)(
+                pos, self.seg, self._cid, self._pic, self._nseg, self._ring,
+                self.exclude_neighbours, self.kernel.r_c + self.skin)
+            self._ref = pos.copy()
+            self.n_builds += 1
+            return
         x0, x1 = pos[self.seg[:, 0]], pos[self.seg[:, 1]]
         mid = 0.5 * (x0 + x1)
         ln = np.linalg.norm(x1 - x0, axis=1)
