@@ -230,17 +230,46 @@ def _pair_loop(pos, seg, a, b, q, delta, debye, amplitude, r_s, r_c, eta_on, nco
         Energy per unit alpha (nm), not scaled.
     """
     inv_sw = 1.0 / (r_c - r_s)
+    inv_debye = 1.0 / debye
     half_pi = 0.5 * math.pi
     inv_ang = 1.0 / (half_pi - eta_on)
     nd = ncoef.shape[0]
     inv_q = 1.0 / q
     inv_q2 = inv_q * inv_q
     e_tot = 0.0
+    # per segment, once: length, unit tangent, midpoint
+    nseg = seg.shape[0]
+    sl = np.empty(nseg)
+    st = np.empty((nseg, 3))
+    sm = np.empty((nseg, 3))
+    for i in range(nseg):
+        u0 = pos[seg[i, 1], 0] - pos[seg[i, 0], 0]
+        u1 = pos[seg[i, 1], 1] - pos[seg[i, 0], 1]
+        u2 = pos[seg[i, 1], 2] - pos[seg[i, 0], 2]
+        li = math.sqrt(u0 * u0 + u1 * u1 + u2 * u2)
+        sl[i] = li
+        st[i, 0] = u0 / li
+        st[i, 1] = u1 / li
+        st[i, 2] = u2 / li
+        sm[i, 0] = pos[seg[i, 0], 0] + 0.5 * u0
+        sm[i, 1] = pos[seg[i, 0], 1] + 0.5 * u1
+        sm[i, 2] = pos[seg[i, 0], 2] + 0.5 * u2
     for p in range(a.shape[0]):
-        i0 = seg[a[p], 0]
-        i1 = seg[a[p], 1]
-        j0 = seg[b[p], 0]
-        j1 = seg[b[p], 1]
+        sa = a[p]
+        sb = b[p]
+        la = sl[sa]
+        lb = sl[sb]
+        # midpoint filter: no sample point of a is within r_c of one of b otherwise
+        m0 = sm[sb, 0] - sm[sa, 0]
+        m1 = sm[sb, 1] - sm[sa, 1]
+        m2 = sm[sb, 2] - sm[sa, 2]
+        lim = r_c + 0.5 * (la + lb)
+        if m0 * m0 + m1 * m1 + m2 * m2 >= lim * lim:
+            continue
+        i0 = seg[sa, 0]
+        i1 = seg[sa, 1]
+        j0 = seg[sb, 0]
+        j1 = seg[sb, 1]
         xa0 = pos[i0, 0]
         xa1 = pos[i0, 1]
         xa2 = pos[i0, 2]
@@ -253,21 +282,12 @@ def _pair_loop(pos, seg, a, b, q, delta, debye, amplitude, r_s, r_c, eta_on, nco
         eb0 = pos[j1, 0] - xb0
         eb1 = pos[j1, 1] - xb1
         eb2 = pos[j1, 2] - xb2
-        la = math.sqrt(ea0 * ea0 + ea1 * ea1 + ea2 * ea2)
-        lb = math.sqrt(eb0 * eb0 + eb1 * eb1 + eb2 * eb2)
-        # midpoint filter: no sample point of a is within r_c of one of b otherwise
-        m0 = (xb0 + 0.5 * eb0) - (xa0 + 0.5 * ea0)
-        m1 = (xb1 + 0.5 * eb1) - (xa1 + 0.5 * ea1)
-        m2 = (xb2 + 0.5 * eb2) - (xa2 + 0.5 * ea2)
-        lim = r_c + 0.5 * (la + lb)
-        if m0 * m0 + m1 * m1 + m2 * m2 >= lim * lim:
-            continue
-        ta0 = ea0 / la
-        ta1 = ea1 / la
-        ta2 = ea2 / la
-        tb0 = eb0 / lb
-        tb1 = eb1 / lb
-        tb2 = eb2 / lb
+        ta0 = st[sa, 0]
+        ta1 = st[sa, 1]
+        ta2 = st[sa, 2]
+        tb0 = st[sb, 0]
+        tb1 = st[sb, 1]
+        tb2 = st[sb, 2]
         c = ta0 * tb0 + ta1 * tb1 + ta2 * tb2
         if not abs(c) > 1e-12:
             continue  # G = 0 for every sample point (eta undefined)
@@ -296,9 +316,10 @@ def _pair_loop(pos, seg, a, b, q, delta, debye, amplitude, r_s, r_c, eta_on, nco
                 rn = math.sqrt(r0 * r0 + r1 * r1 + r2 * r2)
                 if not rn < r_c:
                     continue  # K = dK = 0 exactly
-                d0 = r0 / rn
-                d1 = r1 / rn
-                d2 = r2 / rn
+                inv_rn = 1.0 / rn
+                d0 = r0 * inv_rn
+                d1 = r1 * inv_rn
+                d2 = r2 * inv_rn
                 s = cr0 * d0 + cr1 * d1 + cr2 * d2
                 # angular factor G(c, s), Eq. (C3): fold eta' = atan(s/c), switch S, N(eta')
                 eta = math.atan(s / c)
@@ -316,8 +337,8 @@ def _pair_loop(pos, seg, a, b, q, delta, debye, amplitude, r_s, r_c, eta_on, nco
                 if not sw > 0.0:
                     continue
                 # distance weight K(r), Eq. (C1)-(C2): Fermi step times the C2 switch
-                f = 1.0 / (1.0 + math.exp((rn - delta) / debye))
-                df = -f * (1.0 - f) / debye
+                f = 1.0 / (1.0 + math.exp((rn - delta) * inv_debye))
+                df = -f * (1.0 - f) * inv_debye
                 y = (rn - r_s) * inv_sw
                 if y <= 0.0:
                     cs = 1.0
@@ -330,9 +351,9 @@ def _pair_loop(pos, seg, a, b, q, delta, debye, amplitude, r_s, r_c, eta_on, nco
                 live = True
                 # cos, sin, tan(/2) of the folded angle from c and s (no more transcendentals)
                 rho2 = c * c + s * s
-                rho = math.sqrt(rho2)
-                cos_e = abs(c) / rho
-                sin_e = (s if c > 0.0 else -s) / rho
+                inv_rho = 1.0 / math.sqrt(rho2)
+                cos_e = abs(c) * inv_rho
+                sin_e = (s if c > 0.0 else -s) * inv_rho
                 sq = math.sqrt(cos_e)
                 th = sin_e / (1.0 + cos_e)
                 e2 = eta * eta
@@ -342,10 +363,11 @@ def _pair_loop(pos, seg, a, b, q, delta, debye, amplitude, r_s, r_c, eta_on, nco
                     dn = dn * e2 + n
                     n = n * e2 + ncoef[t]
                 dn = dn * 2.0 * eta
-                h = th * sq * sw / n
+                inv_n = 1.0 / n
+                h = th * sq * sw * inv_n
                 dh = (0.5 * (1.0 + th * th) * sq * sw
                       - th * sin_e / (2.0 * sq) * sw
-                      + th * sq * dsw) / n - h * dn / n
+                      + th * sq * dsw) * inv_n - h * dn * inv_n
                 G = rho2 * h
                 dGc = 2.0 * c * h - s * dh
                 dGs = 2.0 * s * h + c * dh
@@ -354,7 +376,7 @@ def _pair_loop(pos, seg, a, b, q, delta, debye, amplitude, r_s, r_c, eta_on, nco
                 kg += K * G * inv_q2
                 # dE/dr = w dK G d + (w K dG/ds / |r|) (cr - s d)
                 u = w * dK * G
-                v = wK * dGs / rn
+                v = wK * dGs * inv_rn
                 dr0 = u * d0 + v * (cr0 - s * d0)
                 dr1 = u * d1 + v * (cr1 - s * d1)
                 dr2 = u * d2 + v * (cr2 - s * d2)
@@ -383,12 +405,14 @@ def _pair_loop(pos, seg, a, b, q, delta, debye, amplitude, r_s, r_c, eta_on, nco
         # t and l depend on e = x1 - x0 only: dt/de = (I - t t^T)/l, dl/de = t
         pa = gta0 * ta0 + gta1 * ta1 + gta2 * ta2
         pb = gtb0 * tb0 + gtb1 * tb1 + gtb2 * tb2
-        da0 = (gta0 - pa * ta0) / la + lb * kg * ta0
-        da1 = (gta1 - pa * ta1) / la + lb * kg * ta1
-        da2 = (gta2 - pa * ta2) / la + lb * kg * ta2
-        db0 = (gtb0 - pb * tb0) / lb + la * kg * tb0
-        db1 = (gtb1 - pb * tb1) / lb + la * kg * tb1
-        db2 = (gtb2 - pb * tb2) / lb + la * kg * tb2
+        ila = 1.0 / la
+        ilb = 1.0 / lb
+        da0 = (gta0 - pa * ta0) * ila + lb * kg * ta0
+        da1 = (gta1 - pa * ta1) * ila + lb * kg * ta1
+        da2 = (gta2 - pa * ta2) * ila + lb * kg * ta2
+        db0 = (gtb0 - pb * tb0) * ilb + la * kg * tb0
+        db1 = (gtb1 - pb * tb1) * ilb + la * kg * tb1
+        db2 = (gtb2 - pb * tb2) * ilb + la * kg * tb2
         out[i0, 0] += scale * (ga00 - da0)
         out[i0, 1] += scale * (ga01 - da1)
         out[i0, 2] += scale * (ga02 - da2)
