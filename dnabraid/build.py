@@ -5,7 +5,15 @@ surface tether (index 0 of the chain, immobile) to the bead attachment point (la
 index of the chain). In the braid the two attachment points are joined by a rigid link
 of length ``tether_separation_nm``: together they are the magnetic bead, pulled by the
 force and held by the rotational trap. No bead-DNA excluded volume is modelled (the
-bead is large and sits above the DNA under tension); no twist term (nicked DNA).
+bead is large and sits above the DNA under tension). Nicked scenes (braid, tether) have
+no twist term and no frame particles.
+
+Torsionally constrained DNA (``plectoneme``): after the DNA beads come one side
+particle per bond (chain ``F``; the bond's material frame, :mod:`dnabraid.forces.twist`)
+and the bead's orientation particle m (chain ``M``), held horizontal at ``BEAD_ARM_NM``
+from the attachment and turned by the rotational trap; the twist energy couples the
+surface frame (+z, +x), the bond frames and the bead frame (+z, m - r_att), so turning
+the bead changes the linking number. Side particles and m carry no excluded volume.
 """
 
 from __future__ import annotations
@@ -21,11 +29,26 @@ from . import forcefield, units
 from .forces.chiral import chiral_force
 from .forces import (bead_exclusion_force, bending_force, pull_force, stretch_force, trap_force, wall_force,
                      wca_exclusions, wca_force)
+from .forces.twist import (bead_plane_force, frame_springs, initial_side_positions, twist_anchor_force,
+                           twist_bead_force, twist_force)
 from .scene import Scene
 
 #: Force groups, one per physical term, so blow-ups and benchmarks can name the term.
 GROUPS = {"stretch": 0, "bend": 1, "wca": 2, "wall": 3, "pull": 4, "trap": 5, "link": 6,
-          "beadwall": 7, "chiral": 8}
+          "beadwall": 7, "chiral": 8, "twist": 9, "frame": 10}
+
+#: Frame arm a (side particle distance from the axis) in units of the bead spacing.
+FRAME_ARM_FRACTION = 1.0
+#: Side-particle friction / DNA bead friction. The frame angle's friction sets only how fast
+#: twist relaxes (equilibrium does not depend on it); a light side particle relaxes twist
+#: quickly without dragging the beads, and its rates stay below the bonds' (stiffest_mode).
+FRAME_FRICTION_FRACTION = 0.1
+#: Frame spring constant / bond spring constant. The springs only keep u_i well defined
+#: (thermal wobble sqrt(kT/k) ~ 0.6 nm against the 5 nm arm); soft keeps the time step.
+FRAME_K_FRACTION = 0.05
+#: Distance of the bead's orientation particle m from the attachment (nm): the trap's
+#: tangential stiffness K / arm^2 and its rate stay moderate.
+BEAD_ARM_NM = 20.0
 
 
 @dataclasses.dataclass
@@ -44,6 +67,10 @@ class Model:
     bonds : ndarray (n, 2) along the strands
     params : dict of derived numbers (kappa, k_bond, frictions, diameter, ...)
     forces : dict name -> force group of the terms actually present
+    sides : int array (n_bonds,) or None
+        Side particle of each bond (twisted scenes only).
+    bead_orientation : int or None
+        The bead's orientation particle m (twisted scenes only).
     """
 
     scene: Scene
@@ -56,6 +83,8 @@ class Model:
     bonds: np.ndarray
     params: dict
     forces: dict
+    sides: np.ndarray | None = None
+    bead_orientation: int | None = None
 
 
 def build(scene: Scene) -> Model:
@@ -102,6 +131,13 @@ def build(scene: Scene) -> Model:
 
         positions = random_tether(n, b, kappa_kT, scene.seed,
                                   z_min=0.5 * d if scene.surface else None)
+        if scene.twisted:
+            from .analysis.twist import writhe_open
+
+            # Lk = 0 at the start: the bead clamp takes up -Wr of the random start, which
+            # must stay on the principal branch of the clamp angle (|2 pi Wr| < pi/2)
+            if abs(writhe_open(positions)) > 0.25:
+                positions = np.c_[np.zeros(n), np.zeros(n), b * np.arange(n)]
     attachments = [int(c[-1]) for c in chains]
     fixed = [int(c[0]) for c in chains]
     bonds = np.array([(c[i], c[i + 1]) for c in chains for i in range(len(c) - 1)], int)
@@ -113,6 +149,26 @@ def build(scene: Scene) -> Model:
         force.setForceGroup(GROUPS[name])
         system.addForce(force)
         present[name] = GROUPS[name]
+
+    sides = bead_orient = None
+    zeta_frame = FRAME_FRICTION_FRACTION * zeta_dna
+    arm = FRAME_ARM_FRACTION * b
+    g_twist = scene.twist_persistence_nm * kT / b if scene.twisted else 0.0
+    k_frame = FRAME_K_FRACTION * k_bond
+    if scene.twisted:
+        chain = topology.addChain(id="F")
+        sides = []
+        for i in range(n - 1):
+            res = topology.addResidue("FRM", chain)
+            topology.addAtom("F", None, res)
+            sides.append(system.addParticle(units.friction_to_mass_amu(zeta_frame)))
+        sides = np.array(sides)
+        chain = topology.addChain(id="M")
+        res = topology.addResidue("BEO", chain)
+        topology.addAtom("MO", None, res)
+        bead_orient = system.addParticle(units.friction_to_mass_amu(zeta_dna))
+        positions = np.vstack([positions, initial_side_positions(positions[chains[0]], arm),
+                               positions[chains[0][-1]] + np.array([BEAD_ARM_NM, 0.0, 0.0])])
 
     # stretching: harmonic bonds or rigid constraints
     if scene.stretch == "bonds":
@@ -131,7 +187,9 @@ def build(scene: Scene) -> Model:
     if n_str == 2:
         excl_extra = [tuple(attachments), tuple(fixed)]
     exclusions = wca_exclusions(chains, b, d, extra_pairs=excl_extra)
-    add(wca_force(system.getNumParticles(), d, kT, exclusions=exclusions, name="wca"), "wca")
+    dna_particles = [int(i) for c in chains for i in c] if scene.twisted else None
+    add(wca_force(system.getNumParticles(), d, kT, particles=dna_particles,
+                  exclusions=exclusions, name="wca"), "wca")
     mobile = [int(i) for c in chains for i in c[1:]]
     wall_k = 456.0 * kT / d**2  # = U''_WCA(sigma): as stiff as bead contact
     if scene.surface:
@@ -168,6 +226,24 @@ def build(scene: Scene) -> Model:
                                  wall_k, name="beadwall"), "beadwall")
     else:
         add(pull_force(attachments, [1.0], scene.force_pN, name="pull"), "pull")
+    if scene.twisted:
+        c0 = chains[0]
+        add(frame_springs(c0, sides, arm, b, k_frame, name="frame"), "frame")
+        joints = [(c0[i], c0[i + 1], c0[i + 2], sides[i], sides[i + 1]) for i in range(n - 2)]
+        # interior joints stand for a bond length b, the two clamps for b/2 each: the
+        # chain's twist compliance is L / (C kT) (forces/twist.py)
+        add(twist_force(joints, g_twist, name="twist"), "twist")
+        for f in (twist_anchor_force([(c0[0], c0[1], sides[0])], (0, 0, 1), (1, 0, 0),
+                                     2 * g_twist, name="twist_anchor"),
+                  twist_bead_force([(c0[-2], c0[-1], sides[-1], bead_orient)], 2 * g_twist,
+                                   name="twist_bead")):
+            f.setForceGroup(GROUPS["twist"])
+            system.addForce(f)
+        att = attachments[0]
+        add(trap_force(att, bead_orient, scene.trap_stiffness_pN_nm, 0.0,
+                       scene.trap_stiffness_pN_nm / BEAD_ARM_NM**2, name="trap"), "trap")
+        add(stretch_force([(att, bead_orient)], k_bond, BEAD_ARM_NM, name="link"), "link")
+        add(bead_plane_force(att, c0[1:-1], wall_k, name="beadwall"), "beadwall")
     debye = forcefield.salt_parameters(scene.salt_mM).debye_nm
     if scene.alpha != 0.0:
         # Kornyshev chiral term between facing segments (docs/chirality.md); left out at
@@ -190,9 +266,19 @@ def build(scene: Scene) -> Model:
         "debye_nm": debye,
         "alpha_pN": scene.alpha,
     }
+    if scene.twisted:
+        params.update({
+            "twist_g_pN_nm": g_twist,
+            "twist_persistence_nm": scene.twist_persistence_nm,
+            "frame_arm_nm": arm,
+            "frame_k_pN_per_nm": k_frame,
+            "zeta_frame_pN_ns_per_nm": zeta_frame,
+            "bead_arm_nm": BEAD_ARM_NM,
+            "zeta_bead_orientation_pN_ns_per_nm": zeta_dna,
+        })
     params.update(stiffest_mode(scene, params))
     return Model(scene, system, topology, positions, chains, attachments, fixed, bonds,
-                 params, present)
+                 params, present, sides, bead_orient)
 
 
 def stiffest_mode(scene: Scene, p: dict) -> dict:
@@ -204,6 +290,13 @@ def stiffest_mode(scene: Scene, p: dict) -> dict:
     difference squared), WCA contact 2 U''(sigma) = 2 x 456 eps / sigma^2, the wall
     U''; the trap K / r^2 and the link act on the bead. The rates of terms acting on the
     same beads add. The time step is ``timestep_safety`` x 2 / rate_max.
+
+    Twisted scenes add, on the side particles (friction zeta_f, arm a): the frame springs
+    4 k_f / zeta_f and the twist 2 (g_left + g_right) / (a^2 zeta_f) <= 6 g / (a^2 zeta_f)
+    (the clamps count 2 g); on the DNA beads: the springs' reaction 4 k_f and the twist
+    through the tangents, bounded by 12 g / b^2 (omega moves by at most ~1 rad per rad of
+    tangent tilt, three joints touch a bead); on the bead's orientation particle m (arm
+    R_m): the trap 2 K / R_m^2 and the link 2 k.
     """
     kT = p["kT_pN_nm"]
     b = scene.bead_spacing_nm
@@ -227,8 +320,24 @@ def stiffest_mode(scene: Scene, p: dict) -> dict:
         r = 0.5 * scene.tether_separation_nm
         rates["trap"] = 2 * scene.trap_stiffness_pN_nm / r**2 * mu_a
         rates["link"] = 3 * p["k_bond_pN_per_nm"] * mu_a
-    total = rates["stretch"] + rates["bend"] + rates["wca"] + rates.get("chiral", 0.0)
-    total = max(total, rates["wall"] + rates["stretch"], rates.get("trap", 0) + rates.get("link", 0))
+    dna_extra = 0.0
+    side_total = 0.0
+    if scene.twisted:
+        g = p["twist_g_pN_nm"]
+        zf = p["zeta_frame_pN_ns_per_nm"]
+        a = p["frame_arm_nm"]
+        kf = p["frame_k_pN_per_nm"]
+        rates["frame"] = 4.0 * kf / zf
+        rates["twist"] = 6.0 * g / (a * a * zf)
+        dna_extra = (4.0 * kf + 12.0 * g / b**2) * mu
+        side_total = rates["frame"] + rates["twist"]
+        zm = p["zeta_bead_orientation_pN_ns_per_nm"]
+        rates["trap"] = 2 * scene.trap_stiffness_pN_nm / p["bead_arm_nm"] ** 2 / zm
+        rates["link"] = 2 * p["k_bond_pN_per_nm"] / zm
+    total = rates["stretch"] + rates["bend"] + rates["wca"] + rates.get("chiral", 0.0) + dna_extra
+    # the bead's plane (twisted tether) is as stiff as the wall and never acts with it
+    total = max(total, rates["wall"] + rates["stretch"] + dna_extra, side_total,
+                rates.get("trap", 0) + rates.get("link", 0))
     stiff = max(rates, key=rates.get)
     dt_ns = scene.timestep_safety * 2.0 / total
     reason = (f"stiffest term '{stiff}' (rate {rates[stiff]:.3g}/ns); summed bound "

@@ -21,6 +21,23 @@ from .scene import Scene, SceneError
 log = logging.getLogger(__name__)
 
 
+def twist_summary(r) -> dict:
+    """Mean/SEM of the twist observables of one :class:`~dnabraid.protocols.PointResult`."""
+    import numpy as np
+
+    ms = reporters._ms
+    lk = r.twist + r.writhe
+    tip = r.plectoneme_tip_nm
+    return {"twist_torque_pN_nm": ms(r.twist_torque_pN_nm), "twist": ms(r.twist),
+            "writhe": ms(r.writhe), "linking": ms(lk),
+            "plectonemes": ms(r.plectonemes),
+            "plectoneme_length_nm": ms(r.plectoneme_length_nm),
+            "plectoneme_fraction": float(np.mean(r.plectonemes > 0)) if r.plectonemes.size
+            else None,
+            "plectoneme_tip_nm": float(np.nanmedian(tip)) if np.any(np.isfinite(tip))
+            else None}
+
+
 def prepare_out_dir(scene: Scene, out: str) -> bool:
     """Create ``out`` for ``scene``; return True if it resumes an earlier run of the same scene.
 
@@ -114,6 +131,20 @@ def run_scene(scene: Scene, out: str, *, platform: str = "CPU", threads: int | N
         "versions": reporters.versions(),
         "points": reporters.summarise_points(results),
     }
+    if scene.twisted:
+        summary["units"].update({
+            "twist_torque": "pN nm, 2 pi Tw C kT / L (exact in the mean; less noisy than the "
+                            "trap torque)",
+            "twist": "turns (Tw, clamps included)",
+            "writhe": "turns (Wr, Gauss integral, chain closed by vertical rays)",
+            "linking": "turns (Tw + Wr; equals the bead angle while the DNA does not pass "
+                       "through itself)",
+            "plectonemes": "number per frame; plectoneme_length in nm of DNA; tip in nm of "
+                           "contour from the surface (analysis.twist.find_plectonemes)"})
+        notes.append("torsionally constrained DNA: side-particle frames, twist persistence "
+                     f"{scene.twist_persistence_nm} nm, twist-stretch coupling left out")
+        for pt, r in zip(summary["points"], results):
+            pt.update(twist_summary(r))
     short = [pt["turns"] for pt in summary["points"]
              if pt["extension_nm"].get("sem_reliable") is False]
     if short:

@@ -108,3 +108,15 @@ def twist_bead(pos, bonds, g, axis=(0.0, 0.0, 1.0)):
                              np.tile(a, (n, 1)), pos[bd[:, 3]] - pos[bd[:, 1]])
     return _energy_forces(pos, om, grads, [(bd[:, 1], bd[:, 0]), (bd[:, 2], bd[:, 0]),
                                            (None, None), (bd[:, 3], bd[:, 1])], g)
+
+
+def bead_plane(pos, attachment, particles, k):
+    """U = sum k/2 (z_i - z_att)^2 for z_i > z_att."""
+    pos = np.asarray(pos, float)
+    p = np.asarray(particles, int)
+    pen = np.clip(pos[p, 2] - pos[attachment, 2], 0, None)
+    e = 0.5 * k * float(np.sum(pen**2))
+    f = np.zeros_like(pos)
+    f[p, 2] = -k * pen
+    f[attachment, 2] = k * float(np.sum(pen))
+    return e, f

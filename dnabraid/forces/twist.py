@@ -241,3 +241,28 @@ def initial_side_positions(chain_pos, arm_nm: float, first=(1.0, 0.0, 0.0)) -> n
         u[i] = cur
         prev_t = t[i]
     return p[:-1] + arm_nm * u
+
+
+def bead_plane_force(attachment: int, particles, k_pN_per_nm: float, *,
+                     name: str = "beadwall") -> openmm.CustomCompoundBondForce:
+    """The magnetic bead's lower surface as a plane through its attachment point.
+
+    U = k/2 (z_i - z_att)^2 for z_i > z_att. The bead (radius ~500 nm) is far larger than
+    the DNA's excursions, so its surface near the attachment is the plane z = z_att. For a
+    torsionally constrained tether this keeps the DNA off the vertical ray above the
+    attachment that closes the chain for the writhe: the linking number stays Tw + Wr.
+
+    Parameters
+    ----------
+    attachment : int
+        The bead's attachment particle.
+    particles : array_like of int
+        DNA beads kept below it (not the attachment itself).
+    k_pN_per_nm : float
+    """
+    f = openmm.CustomCompoundBondForce(2, f"0.5*{name}_k*step(dz)*dz^2; dz=z2-z1")
+    f.setName(name)
+    f.addGlobalParameter(f"{name}_k", float(k_pN_per_nm) * PN_NM_IN_KJ_MOL)
+    for i in np.asarray(particles, dtype=int).ravel():
+        f.addBond([int(attachment), int(i)], [])
+    return f
