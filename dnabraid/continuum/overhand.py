@@ -445,7 +445,10 @@ def solve_loop_elastica(x: float, *, tol: float = 1e-8, n_nodes: int = 41,
         raise ValueError(f"n_nodes must be >= 3, got {n_nodes!r}")
     if initial is not None and initial.solution is not None and initial.success:
         s0 = initial.solution
-        t, y, p = s0.x, s0.y.copy(), s0.p.copy()
+        # resample on a modest mesh: carrying a refined mesh along a continuation path
+        # makes every later solve pay for it
+        t = np.linspace(0.0, 1.0, int(n_nodes) if int(n_nodes) > 101 else 101)
+        y, p = s0.sol(t), s0.p.copy()
         x_old = float(initial.values["x"])
         y[2] = y[2] + 0.5 * (x - x_old) * (1.0 - t)  # shift the guess to the new ends
         p[0] = p[0] + 0.5 * (x - x_old)
@@ -478,7 +481,8 @@ def solve_loop_elastica(x: float, *, tol: float = 1e-8, n_nodes: int = 41,
     status, message = _BVP_STATUS.get(sol.status, 4), sol.message
     if ok:
         kap = sol.y[1]
-        if Lh <= 0.0 or np.any(kap < -1e-6) or not (-1e-9 <= T <= 0.25 + 1e-9):
+        slack = max(1e-6, 10.0 * tol)  # loose tolerances: tiny apex curvature may dip below 0
+        if Lh <= 0.0 or np.any(kap < -slack) or not (-slack <= T <= 0.25 + slack):
             ok, status = False, 4
             message = ("converged to a non-physical branch (loop not convex / T outside "
                        f"[0, 1/4]): lambda/2 = {Lh:.4g}, T R^2/B = {T:.4g}")
@@ -554,7 +558,7 @@ class GTable:
 
 
 def g_table(x_values: Sequence[float] | None = None, *, x_max: float = DEFAULT_X_MAX,
-            n_points: int = 64, tol: float = 1e-8, max_nodes: int = 100000) -> GTable:
+            n_points: int = 96, tol: float = 1e-6, max_nodes: int = 100000) -> GTable:
     """Solve the loop elastica on a grid of ``x = ell/R`` by continuation from the circle.
 
     Parameters
@@ -578,15 +582,23 @@ def g_table(x_values: Sequence[float] | None = None, *, x_max: float = DEFAULT_X
         xs = np.asarray(x_values, dtype=float)
         if xs.ndim != 1 or xs.size < 4 or xs[0] != 0.0 or np.any(np.diff(xs) <= 0):
             raise ValueError("x_values must be an increasing 1-D grid of >= 4 points from 0")
+    # continuation path: the grid plus steps of at most 20 % beyond x = 2 (not stored)
+    path = sorted(set(float(v) for v in xs) | set(
+        float(v) for v in np.geomspace(2.0, max(2.0, xs[-1]),
+                                       int(math.ceil(math.log(max(xs[-1], 2.0) / 2.0)
+                                                     / math.log(1.2))) + 1)
+        if v < xs[-1]))
+    wanted = set(float(v) for v in xs)
     rows, prev, msgs = [], None, []
-    for x in xs:
-        res = solve_loop_elastica(float(x), tol=tol, max_nodes=max_nodes, initial=prev)
+    for x in path:
+        res = solve_loop_elastica(x, tol=tol, max_nodes=max_nodes, initial=prev)
         if not res.success:  # retry from the circle
-            res = solve_loop_elastica(float(x), tol=tol, max_nodes=max_nodes)
+            res = solve_loop_elastica(x, tol=tol, max_nodes=max_nodes)
         if not res.success:
             msgs.append(f"x={x:g}: {res.message}")
             break
-        rows.append(res)
+        if x in wanted:
+            rows.append(res)
         prev = res
     ok = not msgs
     xs = xs[: len(rows)]
@@ -598,8 +610,12 @@ def g_table(x_values: Sequence[float] | None = None, *, x_max: float = DEFAULT_X
 
 
 @functools.lru_cache(maxsize=4)
-def default_g_table(tol: float = 1e-8) -> GTable:
-    """The module's cached ``g`` table (built on first use, about half a second)."""
+def default_g_table(tol: float = 1e-6) -> GTable:
+    """The module's cached ``g`` table (built on first use, ~1 s; relative error ~1e-6).
+
+    ``tol = 1e-6`` already gives ``g`` to ~1e-10 at the nodes (see :func:`convergence_table`),
+    so the spline, not the BVP, sets the error.
+    """
     return g_table(tol=tol)
 
 
@@ -750,6 +766,13 @@ def solve_overhand(e: float, n, h: float, B: float, mu: float, *, method: str = 
 
 def _solve_overhand_direct(e, n, h, B, mu, G, tol, initial, t0) -> ContinuumResult:
     """Eq. (5) as one BVP: unknowns ``(lambda/2, T, x)``, extra condition ``x^2 = G (2 Lh + x)``."""
+    g_lim = float(g_asymptotic_large(X_MAX_CLOSED_FORM))
+    if not G < g_lim:
+        return ContinuumResult(
+            False, 3, f"g(x) = {G:.4g} (n^2 h/e = {n * n * h / e:.4g}) needs ell/R > "
+            f"{X_MAX_CLOSED_FORM:g}: the loop is a soliton far smaller than the braid, and "
+            f"R ~ e/(4g) = {e / (4 * G):.3g} vs h = {h:.3g}; outside the model",
+            {"e": e, "n": n, "g": G}, wall_time_s=time.perf_counter() - t0)
     if (initial is not None and initial.success
             and getattr(initial.solution, "p", None) is not None
             and len(initial.solution.p) == 3):
@@ -784,7 +807,8 @@ def _solve_overhand_direct(e, n, h, B, mu, G, tol, initial, t0) -> ContinuumResu
                                {"e": e, "g": G}, mesh_size=int(sol.x.size),
                                wall_time_s=time.perf_counter() - t0, solution=sol)
     Lh, T, x = (float(v) for v in sol.p)
-    if x <= 0.0 or Lh <= 0.0 or not (-1e-9 <= T <= 0.25 + 1e-9) or np.any(sol.y[1] < -1e-6):
+    slack = max(1e-6, 10.0 * tol)
+    if x <= 0.0 or Lh <= 0.0 or not (-slack <= T <= 0.25 + slack) or np.any(sol.y[1] < -slack):
         return ContinuumResult(False, 4, f"non-physical loop branch (x = {x:.4g}, T = {T:.4g})",
                                {"e": e, "g": G}, mesh_size=int(sol.x.size),
                                wall_time_s=time.perf_counter() - t0, solution=sol)
@@ -892,9 +916,11 @@ def convergence_table() -> list[dict]:
     """Error of ``g`` and of the master-curve ``F`` against tolerance / grid, with wall time.
 
     * ``loop_bvp``: :func:`solve_loop_elastica` at ``x = 1, 10, 50`` for ``tol`` from
-      ``1e-2`` to ``1e-10``; error ``|g - g_exact|/g_exact`` with ``g_exact`` the
+      ``1e-2`` to ``1e-9`` (below ~1e-10 ``solve_bvp``'s mesh refinement stalls at x = 50); error ``|g - g_exact|/g_exact`` with ``g_exact`` the
       elliptic-integral closed form.
-    * ``g_table``: spline of the BVP table (``tol = 1e-10``) with 16 to 128 grid points;
+    * ``g_table``: spline of the BVP table (``tol = 1e-6``, nodes exact to ~1e-10; at
+      ``tol = 1e-9`` the tables take ~1 min because ``solve_bvp`` stalls refining near
+      ``x ~ 200``, for no gain) with 16 to 128 grid points;
       error = max relative error of ``g`` on 200 points in ``[0.05, 150]``.
     * ``master_F``: ``F`` at the seed's Nitinol parameters, ``n = 4``, ``e = 0.2 m``, by the
       table of each size and by the direct BVP, against the closed-form root.
@@ -902,7 +928,7 @@ def convergence_table() -> list[dict]:
     rows: list[dict] = []
     for x in (1.0, 10.0, 50.0):
         g_ex = g_closed_form(x)
-        for tol in (1e-2, 1e-4, 1e-6, 1e-8, 1e-10):
+        for tol in (1e-2, 1e-4, 1e-6, 1e-8, 1e-9):
             r = solve_loop_elastica(x, tol=tol, n_nodes=11)
             err = abs(r.values["g"] - g_ex) / g_ex if r.success else math.nan
             rows.append({"problem": "loop_bvp", "setting": f"x={x:g},tol={tol:g}",
@@ -913,7 +939,7 @@ def convergence_table() -> list[dict]:
     e, n, h, B, mu = 0.2, 4, NITINOL_RADIUS_M, NITINOL_BENDING_N_M2, NITINOL_MU
     F_ex = solve_overhand(e, n, h, B, mu, method="elliptic").values["F"]
     for npts in (16, 32, 64, 128):
-        tab = g_table(n_points=npts, tol=1e-10)
+        tab = g_table(n_points=npts, tol=1e-6)
         err = float(np.max(np.abs(tab(xs_chk) - g_ex) / g_ex))
         rows.append({"problem": "g_table", "setting": f"n_points={npts}",
                      "mesh_nodes": tab.mesh_nodes, "error": err, "success": tab.success,
