@@ -232,6 +232,11 @@ def test_inverse_round_trip():
     assert e == pytest.approx(0.2, rel=1e-10)
     with pytest.raises(ValueError, match="mu"):
         oh.shortening_from_force(1.0, 4, H, B, 0.0)
+    # very small and very large tension: e -> inf and e -> O(n^2 h)
+    assert oh.shortening_from_force(1e-12, 3, H, B, MU) > 1e6
+    assert 0 < oh.shortening_from_force(1e6, 3, H, B, MU) < 9 * H
+    with pytest.raises(ValueError, match="^F"):
+        oh.shortening_from_force(1e12, 3, H, B, MU)
 
 
 def test_curve_with_continuation_is_monotonic():

@@ -848,7 +848,11 @@ def shortening_from_force(F: float, n, h: float, B: float, mu: float, *,
     h, B = _check_positive("h", h), _check_positive("B", B)
     mu = _check_positive("mu", mu)
     x = (C5_FORCE * n * n * F * h * h / (mu * B)) ** (1.0 / 3.0)  # Eq. (5), argument of g
-    g, _ = _g_callable(method, table)
+    g, x_hi = _g_callable(method, table)
+    if x > x_hi:  # beyond the table: the closed form reaches further
+        if x > X_MAX_CLOSED_FORM:
+            raise ValueError(f"F = {F!r} too large: ell/R = {x:.4g} > {X_MAX_CLOSED_FORM:g}")
+        g = g_closed_form
     return C5_SHORTENING * n * n * h / float(g(x))  # Eq. (5)
 
 
