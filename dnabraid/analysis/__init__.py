@@ -1,4 +1,4 @@
-"""Analysis: pure-numpy geometry and statistics, plus thin MDAnalysis classes.
+"""Analysis: pure-numpy geometry, twist/writhe and statistics, plus thin MDAnalysis classes.
 
 ``geometry`` and ``stats`` depend only on numpy/scipy; ``mda`` (MDAnalysis
 ``AnalysisBase`` subclasses) is imported lazily so the pure functions stay cheap.
@@ -16,6 +16,13 @@ from .geometry import (
     unwrap_angle,
     writhe,
 )
+from .twist import (
+    find_plectonemes,
+    linking_number,
+    tether_twist,
+    twist_angles,
+    writhe_open,
+)
 
 __all__ = [
     "bending_cosines",
@@ -28,4 +35,9 @@ __all__ = [
     "persistence_length_from_cosines",
     "unwrap_angle",
     "writhe",
+    "find_plectonemes",
+    "linking_number",
+    "tether_twist",
+    "twist_angles",
+    "writhe_open",
 ]

@@ -25,6 +25,7 @@ import numpy as np
 from MDAnalysis.analysis.base import AnalysisBase
 
 from . import geometry, stats
+from . import twist as _twist
 
 __all__ = [
     "ANGSTROM_TO_NM",
@@ -32,7 +33,10 @@ __all__ = [
     "Catenation",
     "CrossingAngles",
     "Extension",
+    "Plectonemes",
+    "TwistWrithe",
     "select_strands",
+    "select_twisted_tether",
 ]
 
 #: MDAnalysis length unit (Angstrom) in nm.
@@ -265,3 +269,117 @@ class BendingPersistence(AnalysisBase):
             if 0.0 < mc <= 1.0
             else float("nan")  # no exponential decay to fit
         )
+
+
+def select_twisted_tether(universe):
+    """Atom groups of a twisted tether (plectoneme scene): DNA (residues ``DNA``), side
+    particles (``FRM``, one per bond) and the bead's orientation particle (``BEO``).
+
+    Selected by residue name: OpenMM's PDB writer renames chains A, B, C... in order.
+    """
+    groups = tuple(universe.select_atoms(f"resname {c}") for c in ("DNA", "FRM", "BEO"))
+    for c, g in zip(("DNA", "FRM", "BEO"), groups):
+        if len(g) == 0:
+            raise ValueError(f"no atoms with resname {c!r}: not a plectoneme trajectory")
+    return groups
+
+
+class TwistWrithe(AnalysisBase):
+    """Twist, writhe and linking number of a twisted tether, per frame.
+
+    Tw includes the surface clamp (+z, +x) and the bead clamp (+z, horizontal part of the
+    bead orientation vector); Wr closes the chain by vertical rays
+    (:mod:`dnabraid.analysis.twist`). Lk = Tw + Wr equals the bead's turns.
+
+    Parameters
+    ----------
+    dna_atoms, side_atoms, bead_orientation_atoms : AtomGroup
+        From :func:`select_twisted_tether`; ``len(side_atoms) == len(dna_atoms) - 1``.
+
+    Attributes
+    ----------
+    results.twist, results.writhe, results.linking : ndarray, shape (n_frames,)
+        Turns.
+    results.twist_torque_pN_nm : ndarray, shape (n_frames,), only with ``twist_persistence_nm``
+        and ``kT_pN_nm`` given: 2 pi Tw C kT / L with L the rest contour length.
+    """
+
+    def __init__(self, dna_atoms, side_atoms, bead_orientation_atoms, *,
+                 twist_persistence_nm=None, kT_pN_nm=None, contour_nm=None, **kwargs):
+        _check_group(dna_atoms, "dna_atoms", min_atoms=3)
+        _check_group(side_atoms, "side_atoms")
+        _check_group(bead_orientation_atoms, "bead_orientation_atoms", min_atoms=1)
+        if len(side_atoms) != len(dna_atoms) - 1:
+            raise ValueError(f"need one side particle per bond: {len(dna_atoms) - 1}; got "
+                             f"{len(side_atoms)}")
+        super().__init__(dna_atoms.universe.trajectory, **kwargs)
+        self._dna, self._sides, self._bead = dna_atoms, side_atoms, bead_orientation_atoms
+        self._C, self._kT, self._L = twist_persistence_nm, kT_pN_nm, contour_nm
+
+    def _prepare(self):
+        self.results.twist = np.full(self.n_frames, np.nan)
+        self.results.writhe = np.full(self.n_frames, np.nan)
+
+    def _single_frame(self):
+        x = _nm(self._dna)
+        bead = _nm(self._bead)[0] - x[-1]
+        i = self._frame_index
+        self.results.twist[i] = _twist.tether_twist(x, _nm(self._sides), bead)
+        self.results.writhe[i] = _twist.writhe_open(x)
+
+    def _conclude(self):
+        self.results.linking = self.results.twist + self.results.writhe
+        if self._C is not None and self._kT is not None:
+            L = self._L
+            if L is None:
+                L = float(np.sum(geometry.bond_lengths(_nm(self._dna))))
+            self.results.twist_torque_pN_nm = (2 * np.pi * self._C * self._kT / L
+                                               * self.results.twist)
+
+
+class Plectonemes(AnalysisBase):
+    """Plectonemes per frame (:func:`dnabraid.analysis.twist.find_plectonemes`).
+
+    Parameters
+    ----------
+    dna_atoms : AtomGroup
+    **finder : keyword arguments of ``find_plectonemes`` (contact_nm, min_separation_nm,
+        tip_tolerance_nm, min_length_nm); other keywords go to AnalysisBase.
+
+    Attributes
+    ----------
+    results.count : ndarray of int, shape (n_frames,)
+    results.length_nm : ndarray, shape (n_frames,)
+        DNA in plectonemes.
+    results.tip_nm : ndarray, shape (n_frames,)
+        Tip (contour position from the first bead) of the longest; NaN without one.
+    results.plectonemes : list of lists of Plectoneme
+    results.fraction : float
+        Fraction of frames with at least one plectoneme.
+    """
+
+    _FINDER = ("contact_nm", "min_separation_nm", "tip_tolerance_nm", "min_length_nm")
+
+    def __init__(self, dna_atoms, **kwargs):
+        _check_group(dna_atoms, "dna_atoms", min_atoms=3)
+        self._kw = {k: kwargs.pop(k) for k in self._FINDER if k in kwargs}
+        super().__init__(dna_atoms.universe.trajectory, **kwargs)
+        self._dna = dna_atoms
+
+    def _prepare(self):
+        self.results.count = np.zeros(self.n_frames, dtype=int)
+        self.results.length_nm = np.zeros(self.n_frames)
+        self.results.tip_nm = np.full(self.n_frames, np.nan)
+        self.results.plectonemes = [None] * self.n_frames
+
+    def _single_frame(self):
+        pl = _twist.find_plectonemes(_nm(self._dna), **self._kw)
+        i = self._frame_index
+        self.results.plectonemes[i] = pl
+        self.results.count[i] = len(pl)
+        if pl:
+            self.results.length_nm[i] = sum(q.length_nm for q in pl)
+            self.results.tip_nm[i] = max(pl, key=lambda q: q.length_nm).tip_nm
+
+    def _conclude(self):
+        self.results.fraction = float(np.mean(self.results.count > 0)) if self.n_frames else 0.0

@@ -193,7 +193,9 @@ def find_plectonemes(chain, *, contact_nm: float = 12.0, min_separation_nm: floa
     are paired around the end loop, so its contacts share their contour midpoint
     (s_i + s_j)/2, the tip; contacts are sorted by midpoint and split where consecutive
     midpoints differ by more than ``tip_tolerance_nm``. Each group spanning at least
-    ``min_length_nm`` of contour is a plectoneme from min s_i to max s_j.
+    ``min_length_nm`` of contour is a plectoneme from min s_i to max s_j. Its ends are
+    found to about ``contact_nm`` on each side (tail beads near the base touch the far
+    branch), its tip to a few bead spacings.
 
     Parameters
     ----------

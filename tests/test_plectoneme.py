@@ -1,0 +1,170 @@
+"""The plectoneme scene: keys, the terms it builds, linking-number conservation over a run,
+the two torque estimators, the plectoneme finder, MDAnalysis classes, and (slow) the hat
+curve against Moroz-Nelson and the buckling torque.
+"""
+
+import math
+import os
+
+import numpy as np
+import pytest
+
+from dnabraid.analysis import twist as atw
+from dnabraid.build import build
+from dnabraid.runner import run_scene
+from dnabraid.scene import SceneError, make_scene
+
+Z_TOL = 4.0
+#: Linking number: Tw + Wr must equal the imposed turns to 1 % (the bead lags the trap by
+#: torque / K ~ 1e-4 turns; Tw + Wr equals the bead angle to round-off).
+LK_RTOL = 0.01
+
+
+def test_scene_keys_and_validation():
+    s = make_scene("plectoneme")
+    assert s.twisted and s.turned and s.twist_persistence_nm == 100.0
+    assert "twist_persistence_nm" in s.to_dict()
+    assert "twist_persistence_nm" not in make_scene("braid").to_dict()
+    with pytest.raises(SceneError, match="twist_persistence_nm"):
+        make_scene("braid", {"twist_persistence_nm": 90.0})
+    with pytest.raises(SceneError, match="tether_separation_nm"):
+        make_scene("plectoneme", {"tether_separation_nm": 20.0})
+    with pytest.raises(SceneError, match="twist_persistence_nm"):
+        make_scene("plectoneme", {"twist_persistence_nm": 2.0})
+    # a plectoneme's branches must not pass through each other, whatever its length
+    with pytest.raises(SceneError, match="bead_spacing_nm"):
+        make_scene("plectoneme", {"length_nm": 60.0, "bead_spacing_nm": 10.0, "persistence_nm": 50.0})
+
+
+def test_chiral_term_built_for_plectoneme():
+    m = build(make_scene("plectoneme", {"length_nm": 100.0, "alpha": 0.5}))
+    assert "chiral" in m.forces
+    assert "chiral" in m.params["rates_per_ns"]
+    m0 = build(make_scene("plectoneme", {"length_nm": 100.0}))
+    assert "chiral" not in m0.forces
+
+
+def synthetic_plectoneme(tail1=60.0, arms=80.0, tail2=60.0, b=2.5, radius=4.0, pitch=20.0,
+                         x0=0.0):
+    """Tail up the z axis, a two-branch plectoneme along +x, tail on up.
+
+    Branch 1 runs out along a right-handed helix of radius ``radius`` about the plectoneme
+    axis, a half-circle end loop turns it back, branch 2 returns interwound (half a
+    period out of phase)."""
+    pts = [np.array([x0, 0, z]) for z in np.arange(0, tail1, b)]
+    base = np.array([x0, 0, tail1])
+    s = np.arange(0, arms, b)
+    ph = 2 * np.pi * s / pitch
+    out = base + np.c_[s, radius * np.cos(ph), radius * np.sin(ph)] - [0, radius, 0]
+    back = base + np.c_[s[::-1], radius * np.cos(ph[::-1] + np.pi),
+                        radius * np.sin(ph[::-1] + np.pi)] - [0, radius, 0]
+    pts += list(out) + list(back)
+    top = np.array([x0, 0, tail1 + 2 * radius])
+    pts += [top + [0, 0, z] for z in np.arange(b, tail2, b)]
+    return np.array(pts)
+
+
+def test_plectoneme_finder_on_synthetic_chains():
+    b = 2.5
+    straight = np.c_[np.zeros(80), np.zeros(80), b * np.arange(80)]
+    assert atw.find_plectonemes(straight) == []
+    p = synthetic_plectoneme()
+    found = atw.find_plectonemes(p)
+    assert len(found) == 1
+    s = np.concatenate([[0], np.cumsum(np.linalg.norm(np.diff(p, axis=0), axis=1))])
+    # the plectoneme is the DNA between the two tails: 2 x 80 nm of branches (+ loop); its
+    # ends are found to about the contact distance on each side (tail beads near the base
+    # touch the far branch)
+    n_tail = len(np.arange(0, 60.0, b))
+    start, end = s[n_tail], s[n_tail + 2 * len(np.arange(0, 80.0, b)) - 1]
+    assert found[0].length_nm == pytest.approx(end - start, abs=2 * 12.0 + 6.0)
+    assert found[0].tip_nm == pytest.approx(0.5 * (start + end), abs=10.0)
+    # two plectonemes along one chain
+    p2 = synthetic_plectoneme()
+    q = p2[-1] + (synthetic_plectoneme() - synthetic_plectoneme()[0]) + [0, 0, b]
+    two = np.vstack([p2, q])
+    assert len(atw.find_plectonemes(two)) == 2
+    summ = atw.plectoneme_summary(two)
+    assert summ["count"] == 2 and summ["length_nm"] > 2 * 100
+
+
+@pytest.fixture(scope="module")
+def twisted_run(tmp_path_factory):
+    out = tmp_path_factory.mktemp("plect") / "run"
+    s = make_scene("plectoneme", {"length_nm": 60.0, "force_pN": 2.0, "turns": [0.0, 1.5],
+                                  "steps": 16_000, "equilibration_steps": 4000,
+                                  "turn_rate": 2e-4, "frame_interval": 1000, "seed": 3})
+    return s, str(out), run_scene(s, str(out))
+
+
+def test_linking_number_conserved(twisted_run):
+    """Tw + Wr equals the bead turns in every frame (no passage), and the imposed turns to 1 %."""
+    s, out, summ = twisted_run
+    from dnabraid.protocols import PointResult
+
+    ck = os.path.join(out, "checkpoints")
+    for f in sorted(os.listdir(ck)):
+        if not f.startswith("point"):
+            continue
+        r = PointResult.load(os.path.join(ck, f))
+        lk = r.twist + r.writhe
+        assert np.all(np.abs(lk - r.turns) <= LK_RTOL * max(abs(r.turns), 1.0)), (r.turns, lk)
+        # frames are taken at observable samples: Lk = bead angle to round-off
+        idx = np.searchsorted(r.step, r.frame_step)
+        np.testing.assert_allclose(lk, r.bead_angle_turns[idx], atol=1e-6)
+        if r.turns != 0:
+            assert np.std(r.writhe) > 0.005  # twist and writhe really exchange
+
+
+def test_torque_estimators_agree(twisted_run):
+    """The trap torque -K sin(lag) and the twist torque 2 pi Tw C kT / L measure the same
+    mean torque; at n = 1.5 (below buckling for 60 nm at 2 pN) it is positive."""
+    s, out, summ = twisted_run
+    pts = {p["turns"]: p for p in summ["points"]}
+    for n, p in pts.items():
+        tt, tr = p["twist_torque_pN_nm"], p["torque_pN_nm"]
+        assert abs(tt["mean"] - tr["mean"]) < Z_TOL * math.hypot(tt["sem"], tr["sem"]) + 2.0
+    t15 = pts[1.5]["twist_torque_pN_nm"]
+    assert t15["mean"] > 10 * t15["sem"]
+    assert abs(pts[0.0]["twist_torque_pN_nm"]["mean"]) < Z_TOL * pts[0.0]["twist_torque_pN_nm"]["sem"] + 1.0
+    # summary carries the twist observables with units
+    assert {"twist", "writhe", "linking", "plectonemes"} <= set(summ["points"][0])
+    assert "twist_torque" in summ["units"]
+
+
+def test_mdanalysis_twist_writhe_and_plectonemes(twisted_run):
+    import MDAnalysis as mda
+
+    from dnabraid.analysis.mda import Plectonemes, TwistWrithe, select_twisted_tether
+
+    s, out, summ = twisted_run
+    u = mda.Universe(os.path.join(out, "topology.pdb"), os.path.join(out, "trajectory.dcd"))
+    dna, sides, bead = select_twisted_tether(u)
+    assert len(dna) == s.n_beads and len(sides) == s.n_beads - 1
+    tw = TwistWrithe(dna, sides, bead, twist_persistence_nm=s.twist_persistence_nm,
+                     kT_pN_nm=s.kT, contour_nm=s.length_nm).run()
+    n_frames = u.trajectory.n_frames
+    assert tw.results.linking.shape == (n_frames,)
+    # the last frames belong to turns = 1.5 (points are written sorted by turns); DCD
+    # positions are single precision
+    assert tw.results.linking[-1] == pytest.approx(1.5, abs=LK_RTOL * 1.5)
+    pl = Plectonemes(dna, contact_nm=12.0).run()
+    assert pl.results.count.shape == (n_frames,)
+
+
+@pytest.mark.slow
+def test_hat_curve_against_theory(tmp_path):
+    """Below buckling C_eff from the torque slope vs Moroz-Nelson; the plateau torque after
+    buckling vs sqrt(2 kT A F) (finite-size: the plateau of a short chain lies above it)."""
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location(
+        "plectoneme_hat", os.path.join(os.path.dirname(__file__), "..", "workflows",
+                                       "plectoneme_hat.py"))
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    res = mod.main(["--force", "1", "--length", "100", "--run", str(tmp_path / "run"),
+                    "--out", str(tmp_path / "hat.txt"), "--steps", "100000"])
+    assert res["ceff_sim"] == pytest.approx(res["ceff_theory"],
+                                            abs=Z_TOL * res["ceff_sim_err"] + 0.1 * res["ceff_theory"])
+    assert 0.8 * res["gamma_b_theory"] < res["plateau_torque"] < 2.0 * res["gamma_b_theory"]
