@@ -135,7 +135,7 @@ def main(argv=None):
             seg, cid, pic, nseg, ring = segments_of(chains)
             excl = default_exclusion(B_NM, delta, lam)
             for be in backends:
-                ev = ChiralEvaluator(seg, cid, pic, nseg, ring, kernel, excl, q, 1.0, "x",
+                ev = ChiralEvaluator(seg, cid, pic, nseg, ring, kernel, excl, q, 2.0, "x",
                                      backend=be)
                 call[be] = per_call_us(ev, np.asarray(end), calls=max(20, 20000 // n))
             npairs = len(ev.candidate_pairs(np.asarray(end))[0])
@@ -149,7 +149,7 @@ def main(argv=None):
             f"# 150 mM: Delta = {delta:.2f} nm, lambda_D = {lam:.3f} nm, b = {B_NM} nm, "
             f"two-ply eta = -30 deg, {args.steps} steps ({np_steps} with numpy); q = sample "
             f"points per segment (default rule now gives q = {qdef}); pairs = Verlet-list "
-            f"candidates\n"
+            f"candidates (skin 2 nm)\n"
             f"# CPU time per step (us): base = bonds + bending + WCA; +nb / +np = base + chiral"
             f" with the numba / numpy evaluator; chiral_us = (+nb) - base; call_us: one"
             f" energy_grad call\n"
