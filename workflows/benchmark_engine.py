@@ -2,7 +2,10 @@
 
 For braids of 2 x {50, 200, 800} beads: the full nicked-braid force field (bonds, bending,
 WCA, wall, pull, trap) against the same beads with bonds only; also rigid-bond
-constraints instead of springs, and the WCA neighbour-list cutoff. Prints a table and
+constraints instead of springs, and the WCA neighbour-list cutoff. Twisted rows: one
+torsionally constrained tether of {50, 200, 800} beads (plectoneme scene: side particle
+per bond, twist energy, bead frame) against the same scene with the twist terms and
+frame springs removed (the cost of twist). Prints a table and
 writes it to workflows/results/benchmark_engine.txt.
 
 Run pinned to one core for the numbers the CLI uses (it pins itself):
@@ -24,11 +27,14 @@ from dnabraid.scene import make_scene
 KEEP_BONDS_ONLY = {"stretch", "link"}
 
 
-def time_model(model, keep=None, steps=2000, platform="CPU", wca_cutoff=None):
+TWIST_TERMS = ("twist", "twist_anchor", "twist_bead", "frame")
+
+
+def time_model(model, keep=None, steps=2000, platform="CPU", wca_cutoff=None, drop=()):
     system = openmm.XmlSerializer.deserialize(openmm.XmlSerializer.serialize(model.system))
     for i in reversed(range(system.getNumForces())):
         f = system.getForce(i)
-        if keep is not None and f.getName() not in keep:
+        if (keep is not None and f.getName() not in keep) or f.getName() in drop:
             system.removeForce(i)
         elif wca_cutoff and f.getName() == "wca":
             f.setCutoffDistance(wca_cutoff * model.params["diameter_nm"])
@@ -74,6 +80,17 @@ def main(argv=None):
             npart = m.system.getNumParticles()
             dt_ps = m.params["time_step_ns"] * 1e3
             row = (f"{'2x' + str(n):>9} {name:<34} {1 / sec:>9.0f} {sec * 1e3:>9.4f} "
+                   f"{sec / npart * 1e9:>13.0f} {dt_ps:>7.1f} {dt_ps * 1e-3 / sec:>9.1f}")
+            print(row, flush=True)
+            rows.append(row)
+        for name, drop in (("plectoneme (twisted)", ()),
+                           ("plectoneme, twist+frame removed", TWIST_TERMS)):
+            s = make_scene("plectoneme", {"length_nm": (n - 1) * b, "bead_spacing_nm": b})
+            m = build(s)
+            sec = time_model(m, steps=a.steps, platform=a.platform, drop=drop)
+            npart = m.system.getNumParticles()
+            dt_ps = m.params["time_step_ns"] * 1e3
+            row = (f"{'1x' + str(n):>9} {name:<34} {1 / sec:>9.0f} {sec * 1e3:>9.4f} "
                    f"{sec / npart * 1e9:>13.0f} {dt_ps:>7.1f} {dt_ps * 1e-3 / sec:>9.1f}")
             print(row, flush=True)
             rows.append(row)

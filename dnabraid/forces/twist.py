@@ -77,23 +77,29 @@ def _omega_expression(t1, w1, t2, w2, *, unit_t1=False, unit_t2=False) -> str:
 
     ``t1, t2``: 3 component strings of the (unnormalised unless ``unit_*``) tangents;
     ``w1, w2``: of the raw side vectors (projected here onto the planes normal to t).
+    With raw tangents T1, T2 of lengths n1, n2, sin and cos of omega are both multiplied by
+    n1 n2 > 0 (atan2 is unchanged): S = (n2 T1 + n1 T2) . (u1 x u2),
+    K = (n1 n2 + T1 . T2)(u1 . u2) - (T1 . u2)(T2 . u1), and u = W - (W . T) T / (T . T):
+    one square root per tangent and no normalisations (cheaper in OpenMM).
     """
     defs = ["0.5*g*om^2", "om=atan2(sn,cs)",
-            "sn=(ta1x+ta2x)*(u1y*u2z-u1z*u2y)+(ta1y+ta2y)*(u1z*u2x-u1x*u2z)"
-            "+(ta1z+ta2z)*(u1x*u2y-u1y*u2x)",
-            f"cs=(1+cc)*({_dot('u1', 'u2')})-({_dot('ta1', 'u2')})*({_dot('ta2', 'u1')})",
-            f"cc={_dot('ta1', 'ta2')}"]
+            "sn=(n2*ta1x+n1*ta2x)*(u1y*u2z-u1z*u2y)+(n2*ta1y+n1*ta2y)*(u1z*u2x-u1x*u2z)"
+            "+(n2*ta1z+n1*ta2z)*(u1x*u2y-u1y*u2x)",
+            f"cs=(n1*n2+{_dot('ta1', 'ta2')})*({_dot('u1', 'u2')})"
+            f"-({_dot('ta1', 'u2')})*({_dot('ta2', 'u1')})"]
     for k, t, w, unit in ((1, t1, w1, unit_t1), (2, t2, w2, unit_t2)):
-        # u = w - (w . ta) ta
+        # u = w - (w . T) T / (T . T)
+        # (a Lepton definition may only use names defined after it)
         _vec(defs, f"u{k}", [f"wv{k}{a}-pr{k}*ta{k}{a}" for a in _AX])
-        defs.append(f"pr{k}={_dot(f'wv{k}', f'ta{k}')}")
-        _vec(defs, f"wv{k}", w)
         if unit:
-            _vec(defs, f"ta{k}", t)
+            defs.append(f"pr{k}={_dot(f'wv{k}', f'ta{k}')}")
+            defs.append(f"n{k}=1")
         else:
-            _vec(defs, f"ta{k}", [f"tr{k}{a}/nt{k}" for a in _AX])
-            defs.append(f"nt{k}=sqrt({_dot(f'tr{k}', f'tr{k}')})")
-            _vec(defs, f"tr{k}", t)
+            defs.append(f"pr{k}=({_dot(f'wv{k}', f'ta{k}')})/nn{k}")
+            defs.append(f"n{k}=sqrt(nn{k})")
+            defs.append(f"nn{k}={_dot(f'ta{k}', f'ta{k}')}")
+        _vec(defs, f"wv{k}", w)
+        _vec(defs, f"ta{k}", t)
     return "; ".join(defs)
 
 
