@@ -164,7 +164,13 @@ def test_hat_curve_against_theory(tmp_path):
     mod = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(mod)
     res = mod.main(["--force", "1", "--length", "100", "--run", str(tmp_path / "run"),
-                    "--out", str(tmp_path / "hat.txt"), "--steps", "100000"])
+                    "--out", str(tmp_path / "hat.txt")])
+    # measured 93.8 +- 0.8 nm vs 85.7 nm: a 100-nm chain of 5-nm bonds lacks part of the
+    # writhe fluctuations of Moroz-Nelson's long continuous rod (model tolerance 15 %)
     assert res["ceff_sim"] == pytest.approx(res["ceff_theory"],
-                                            abs=Z_TOL * res["ceff_sim_err"] + 0.1 * res["ceff_theory"])
-    assert 0.8 * res["gamma_b_theory"] < res["plateau_torque"] < 2.0 * res["gamma_b_theory"]
+                                            abs=Z_TOL * res["ceff_sim_err"] + 0.15 * res["ceff_theory"])
+    assert res["ceff_sim"] < res["C"]  # writhe fluctuations soften the twist
+    # measured 26.5 +- 0.7 pN nm vs 20.3: the plectoneme plateau lies above the classical
+    # buckling torque (entropy of the plectoneme, Marko, PRE 76, 021926 (2007))
+    assert 1.0 * res["gamma_b_theory"] < res["plateau_torque"] < 1.6 * res["gamma_b_theory"]
+    assert 1.0 <= res["n_buckle"] <= 2.5
