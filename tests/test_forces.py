@@ -92,6 +92,18 @@ def test_wca():
     check(f, lambda p: ref.wca(p, sigma, eps, excl), pos)
 
 
+def test_wca_on_a_subset_of_particles():
+    """Only ``particles`` interact (frame particles of twisted DNA are left out)."""
+    rng = np.random.default_rng(5)
+    pos = rng.uniform(0, 12.0, size=(30, 3))
+    sigma, eps = 4.0, 4.1
+    sub = list(range(0, 30, 3)) + [1, 2]
+    f = forces.wca_force(30, sigma, eps, particles=sub)
+    e_ref, _ = ref.wca(pos, sigma, eps, particles=sub)
+    assert e_ref > 0
+    check(f, lambda p: ref.wca(p, sigma, eps, particles=sub), pos)
+
+
 def test_wall_and_pull():
     rng = np.random.default_rng(SEED)
     pos = rng.uniform(-3, 3, size=(8, 3))

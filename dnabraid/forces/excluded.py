@@ -71,6 +71,11 @@ def wca_force(n_particles: int, sigma_nm: float, epsilon_pN_nm: float, *, partic
     rc = WCA_RC_FACTOR * sigma_nm
     expr = (f"step({name}_rc-r)*(4*{name}_eps*(sr6*sr6-sr6)+{name}_eps);"
             f"sr6=({name}_sigma/r)^6")
+    if particles is not None:
+        # A per-particle switch instead of an interaction group: OpenMM's CPU platform
+        # evaluates interaction groups without its neighbour list (measured 7x slower for
+        # a 800-bead twisted tether whose frame particles are left out).
+        expr = "on1*on2*" + expr
     f = openmm.CustomNonbondedForce(expr)
     f.setName(name)
     f.addGlobalParameter(f"{name}_eps", float(epsilon_pN_nm) * PN_NM_IN_KJ_MOL)
@@ -80,11 +85,11 @@ def wca_force(n_particles: int, sigma_nm: float, epsilon_pN_nm: float, *, partic
     f.setCutoffDistance(max(list_cutoff_factor, WCA_RC_FACTOR) * sigma_nm)
     f.setUseSwitchingFunction(False)
     f.setUseLongRangeCorrection(False)
-    for _ in range(n_particles):
-        f.addParticle([])
+    parts = None if particles is None else set(map(int, np.asarray(particles).ravel()))
+    if parts is not None:
+        f.addPerParticleParameter("on")
+    for k in range(n_particles):
+        f.addParticle([] if parts is None else [1.0 if k in parts else 0.0])
     for i, j in exclusions:
         f.addExclusion(int(i), int(j))
-    if particles is not None:
-        parts = set(map(int, np.asarray(particles).ravel()))
-        f.addInteractionGroup(parts, parts)
     return f
