@@ -1,0 +1,130 @@
+"""Error against run time (work-precision) for the bead model's cross-checks (issue 6.3).
+
+A. Zero-temperature braid vs the continuum tweezer braid (dnabraid.crosscheck): the default
+   braid geometry (2 x 200 nm, tethers 40 nm, F = 2 pN, n = 2), bead spacing b = 5, 4, 2.5,
+   2 nm; error = relative difference of extension and of torque from the continuum at the
+   bead model's own contact distance.
+B. Thermal tether vs the exact discrete worm-like chain (dnabraid.continuum.wlc): F = 3 pN,
+   L = 25 nm; time step (timestep_safety 0.1 ... 0.9 of the Euler-Maruyama limit) x
+   sampling length; error = |<z> - theory| / theory, with the run's own SEM beside it.
+
+Writes workflows/results/convergence.md and convergence.png (error against wall time) and
+names the cheapest settings that reach 1 %, 5 % and 10 %.
+
+Usage: taskset -c 0 python workflows/convergence.py [--quick]
+"""
+
+from __future__ import annotations
+
+import argparse
+import pathlib
+import tempfile
+import time
+
+HERE = pathlib.Path(__file__).resolve().parent
+
+
+def part_a(spacings):
+    from dnabraid.crosscheck import compare_tweezer
+
+    rows = []
+    for b in spacings:
+        t0 = time.perf_counter()
+        r = compare_tweezer(2.0, 0.0, {"bead_spacing_nm": b})
+        p = r["plus"]
+        ez = abs(p["bead_extension_nm"] - p["continuum_extension_nm"]) / p["continuum_extension_nm"]
+        eg = abs(p["bead_torque_pN_nm"] - p["continuum_torque_pN_nm"]) / abs(p["continuum_torque_pN_nm"])
+        rows.append({"check": "zeroT braid vs continuum", "setting": f"b={b} nm",
+                     "error_extension": ez, "error_torque": eg, "error": max(ez, eg),
+                     "sem_rel": 0.0, "wall_time_s": time.perf_counter() - t0,
+                     "detail": f"z {p['bead_extension_nm']:.2f}/{p['continuum_extension_nm']:.2f} nm, "
+                               f"G {p['bead_torque_pN_nm']:.2f}/{p['continuum_torque_pN_nm']:.2f} pN nm, "
+                               f"contact {r['contact_nm']:.2f} nm"})
+        print(rows[-1], flush=True)
+    return rows
+
+
+def part_b(safeties, steps_list):
+    from dnabraid.build import build
+    from dnabraid.continuum.wlc import discrete_wlc_extension
+    from dnabraid.runner import run_scene
+    from dnabraid.scene import make_scene
+
+    rows = []
+    for sf in safeties:
+        for steps in steps_list:
+            s = make_scene("tether", {"force_pN": 3.0, "length_nm": 25.0, "steps": steps,
+                                      "equilibration_steps": 20_000, "surface": False, "seed": 7,
+                                      "frame_interval": 10_000, "timestep_safety": sf})
+            p = build(s).params
+            theory = discrete_wlc_extension(s.force_pN, s.n_beads - 1, s.bead_spacing_nm,
+                                            p["kappa_kT"], p["kT_pN_nm"],
+                                            stretch_k_pN_per_nm=p["k_bond_pN_per_nm"])["extension_nm"]
+            with tempfile.TemporaryDirectory() as tmp:
+                t0 = time.perf_counter()
+                ext = run_scene(s, tmp)["points"][0]["extension_nm"]
+                wall = time.perf_counter() - t0
+            rows.append({"check": "tether vs discrete WLC", "setting": f"safety={sf}, steps={steps}",
+                         "error": abs(ext["mean"] - theory) / theory, "sem_rel": ext["sem"] / theory,
+                         "wall_time_s": wall,
+                         "detail": f"<z> {ext['mean']:.3f}+-{ext['sem']:.3f} vs {theory:.3f} nm, "
+                                   f"dt {p['time_step_ns'] * 1e3:.3g} ps"})
+            print(rows[-1], flush=True)
+    return rows
+
+
+def cheapest(rows, level):
+    """Cheapest row whose error and 2 x SEM both stay below ``level``."""
+    ok = [r for r in rows if r["error"] + 2 * r["sem_rel"] < level]
+    return min(ok, key=lambda r: r["wall_time_s"]) if ok else None
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--quick", action="store_true", help="fewer settings (a few minutes)")
+    ap.add_argument("--out", default=str(HERE / "results" / "convergence"))
+    args = ap.parse_args(argv)
+    spac = [5.0, 2.5] if args.quick else [5.0, 4.0, 2.5, 2.0]
+    saf = [0.3, 0.9] if args.quick else [0.1, 0.3, 0.6, 0.9]
+    stp = [100_000, 400_000] if args.quick else [50_000, 200_000, 800_000]
+    checks = {"A": part_a(spac), "B": part_b(saf, stp)}
+    lines = [f"# work-precision, {time.strftime('%Y-%m-%d %H:%M')}", ""]
+    for name, rows in checks.items():
+        lines += [f"## {rows[0]['check']}", "",
+                  "| setting | error | 2 SEM (rel) | wall (s) | detail |", "|---|---|---|---|---|"]
+        lines += [f"| {r['setting']} | {r['error']:.3g} | {2 * r['sem_rel']:.2g} | "
+                  f"{r['wall_time_s']:.1f} | {r['detail']} |" for r in rows]
+        lines.append("")
+        for lvl in (0.01, 0.05, 0.10):
+            c = cheapest(rows, lvl)
+            lines.append(f"- cheapest reaching {lvl:.0%}: "
+                         + (f"{c['setting']} ({c['wall_time_s']:.1f} s)" if c else "none tried"))
+        lines.append("")
+    out = pathlib.Path(args.out)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    out.with_suffix(".md").write_text("\n".join(lines) + "\n")
+    print("\n".join(lines))
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(6, 4))
+    for name, rows in checks.items():
+        ax.errorbar([r["wall_time_s"] for r in rows], [r["error"] for r in rows],
+                    yerr=[2 * r["sem_rel"] for r in rows], fmt="o", label=rows[0]["check"])
+    for lvl in (0.01, 0.05, 0.10):
+        ax.axhline(lvl, color="0.8", lw=0.8)
+    ax.set_xscale("log")
+    ax.set_yscale("log")
+    ax.set_xlabel("wall time (s)")
+    ax.set_ylabel("relative error")
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(out.with_suffix(".png"), dpi=120)
+    print(f"written {out.with_suffix('.md')} and .png")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
