@@ -26,11 +26,25 @@ import openmm
 import openmm.app as app
 
 from . import forcefield, units
+from .forces import (
+    bead_exclusion_force,
+    bending_force,
+    pull_force,
+    stretch_force,
+    trap_force,
+    wall_force,
+    wca_exclusions,
+    wca_force,
+)
 from .forces.chiral import chiral_force
-from .forces import (bead_exclusion_force, bending_force, pull_force, stretch_force, trap_force, wall_force,
-                     wca_exclusions, wca_force)
-from .forces.twist import (bead_plane_force, frame_springs, initial_side_positions, twist_anchor_force,
-                           twist_bead_force, twist_force)
+from .forces.twist import (
+    bead_plane_force,
+    frame_springs,
+    initial_side_positions,
+    twist_anchor_force,
+    twist_bead_force,
+    twist_force,
+)
 from .scene import Scene
 
 #: Force groups, one per physical term, so blow-ups and benchmarks can name the term.

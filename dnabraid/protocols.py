@@ -76,7 +76,7 @@ class PointResult:
         os.replace(tmp, path)
 
     @classmethod
-    def load(cls, path: str) -> "PointResult":
+    def load(cls, path: str) -> PointResult:
         with np.load(path) as z:
             kw = {f.name: z[f.name] for f in dataclasses.fields(cls) if f.name in z.files}
         kw["turns"] = float(kw["turns"])

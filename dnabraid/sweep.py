@@ -39,7 +39,8 @@ import sys
 import time
 import traceback
 import warnings
-from typing import Any, Callable
+from collections.abc import Callable
+from typing import Any
 
 if sys.version_info >= (3, 11):
     import tomllib

@@ -5,8 +5,13 @@ import os
 import pytest
 
 from dnabraid import cli
-from dnabraid.scene import (MIN_PASSAGE_BARRIER_KT, SceneError, make_scene, max_bead_spacing_nm,
-                            passage_barrier_kT)
+from dnabraid.scene import (
+    MIN_PASSAGE_BARRIER_KT,
+    SceneError,
+    make_scene,
+    max_bead_spacing_nm,
+    passage_barrier_kT,
+)
 
 
 def test_defaults_resolve_and_roundtrip(tmp_path):

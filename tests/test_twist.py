@@ -11,6 +11,7 @@ import numpy as np
 import openmm
 import pytest
 from openmm import unit as u
+from test_forces import check, random_chain
 
 from dnabraid.analysis import geometry as geo
 from dnabraid.analysis import twist as atw
@@ -18,7 +19,6 @@ from dnabraid.analysis.stats import mean_sem
 from dnabraid.forces import bending_force, stretch_force
 from dnabraid.forces import reference_twist as rt
 from dnabraid.forces import twist as tw
-from test_forces import check, random_chain
 
 SEED = 20261122
 Z_TOL = 4.0

@@ -618,7 +618,6 @@ def solve_knot(n: int = 1, *, n_grid: int | None = None, half_width_W: float | N
 
     try:
         sol_prev = initial.solution if initial is not None else None
-        active_prev = None
         history = []
         for k, N in enumerate(ladder):
             w = np.arange(N + 1) * (W / N)

@@ -73,7 +73,7 @@ import numpy as np
 from scipy.integrate import quad, solve_bvp
 from scipy.interpolate import CubicSpline
 from scipy.optimize import brentq, minimize_scalar
-from scipy.special import ellipe, ellipk, ellipkm1
+from scipy.special import ellipe, ellipkm1
 
 from dnabraid.continuum._result import ContinuumResult
 
@@ -865,7 +865,7 @@ def aspect_ratio_curve(n2h_over_e: Sequence[float], *, table: GTable | None = No
         if not (0.0 < G < float(tab(tab.x_max))):
             out.append(math.nan)
             continue
-        x = brentq(lambda xx: float(tab(xx)) - G, 0.0, tab.x_max, xtol=1e-13)
+        x = brentq(lambda xx, G=G: float(tab(xx)) - G, 0.0, tab.x_max, xtol=1e-13)
         out.append(float(tab.aspect_ratio_at(x)))
     return np.array(out)
 
