@@ -91,8 +91,8 @@ class Scene:
     tether_separation_nm: float = 40.0
     persistence_nm: float = 50.0
     temperature_K: float = 298.15
-    steps: int = 200000
-    equilibration_steps: int = 50000
+    steps: int = 180000
+    equilibration_steps: int = 40000
     turn_rate: float = 5e-5
     seed: int = 1
     diameter_nm: float = 0.0
