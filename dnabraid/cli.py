@@ -204,6 +204,9 @@ def main(argv=None) -> int:
     except (scn.SceneError, FileNotFoundError, ValueError, ImportError) as exc:
         print(f"dnabraid: error: {exc}", file=sys.stderr)
         return 2
+    except BrokenPipeError:  # output piped into `head` and the like: not an error
+        sys.stdout = open(os.devnull, "w")  # noqa: SIM115 - silence the interpreter's flush
+        return 0
     except KeyboardInterrupt:
         print("dnabraid: interrupted; finished turn values are checkpointed, rerun the same "
               "command to resume", file=sys.stderr)
