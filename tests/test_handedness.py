@@ -87,10 +87,10 @@ def test_disfavoured_hand_opens(contact):
 
 @pytest.mark.slow
 @pytest.mark.xfail(strict=False, reason=(
-    "open (issue 4): measured 2026-11-22 with these settings: alpha = 0: +23.8 +- 10.5, "
-    "alpha = 12 pN: -11.8 +- 10.0 pN nm; the alpha = 0 torque sum came out positive in every "
-    "thermal braid run so far (+7 to +24 pN nm, 1.5-2.3 SEM each), unexplained; the zero-"
-    "temperature model is exactly symmetric"))
+    "open (issue 4): too little sampling to resolve the signal. Measured 2026-11-22 with these "
+    "settings: alpha = 0: +23.8 +- 10.5, alpha = 12 pN: -11.8 +- 10.0 pN nm. Twelve seeds of "
+    "an n = 0 braid (150k steps) scatter by 15.6 pN nm around -0.5 +- 4.5 (no bias) while "
+    "each run's autocorrelation SEM says ~9.5: the torque SEM is ~1.6x too small"))
 def test_room_temperature_torque_asymmetry_sign(tmp_path):
     """Thermal braids at n = -2, 0, +2: Gamma(+n) + Gamma(-n) is zero within error at
     alpha = 0 and negative beyond 3 standard errors at alpha = 12 pN.
