@@ -594,6 +594,22 @@ def format_table(rows: list[dict], keys: list[str]) -> str:
     return "\n".join(lines)
 
 
+def quick_braid_fixed(*, turns: int, steps: int, seed: int, length_nm: float = 90.0,
+                      **keys) -> dict:
+    """The ``[fixed]`` table of the small braid sweeps in ``workflows/``.
+
+    Turns -N..N, 3 nm beads (fine enough up to 1 M salt), equilibration steps/5 unless
+    given, a frame every tenth of the sampling; ``keys`` add or override flat scene keys
+    (``None`` drops a key, e.g. one that the sweep's grid varies).
+    """
+    fixed = {"length_nm": length_nm, "bead_spacing_nm": 3.0,
+             "turns": list(range(-turns, turns + 1)), "steps": steps,
+             "equilibration_steps": steps // 5, "turn_rate": 1e-4, "seed": seed,
+             "frame_interval": max(100, steps // 10 // 100 * 100)}
+    fixed.update(keys)
+    return {k: v for k, v in fixed.items() if v is not None}
+
+
 def asymmetry(rows: list[dict], keys: list[str]) -> list[dict]:
     """Handedness asymmetry z(+n) - z(-n) per grid point, for the largest n with both signs.
 

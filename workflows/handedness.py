@@ -6,16 +6,13 @@
 Without a chiral term (alpha = 0) the hat curve is symmetric: z(+n) = z(-n) within errors.
 alpha > 0 (pN; the scene key of the chiral inter-strand potential) favours right-handed
 crossings, so the asymmetry grows with alpha. The sweep figure <out>/sweep.png shows the
-asymmetry against alpha per salt. `--alpha` is skipped (salt only) with `--no-alpha`, or
-automatically if this version of the braid scene has no `alpha` key.
+asymmetry against alpha per salt. `--alpha` is skipped (salt only) with `--no-alpha`.
 """
 
 import argparse
-import sys
 
 from dnabraid import sweep
 from dnabraid.cli import run_sweep_verbose
-from dnabraid.scene import SceneError, make_scene
 
 
 def main(argv=None):
@@ -36,18 +33,11 @@ def main(argv=None):
     a = p.parse_args(argv)
     grid = {"salt_mM": a.salt}
     if not a.no_alpha:
-        try:
-            make_scene("braid", {"alpha": a.alpha[0]})
-            grid["alpha"] = a.alpha
-        except SceneError as exc:
-            print(f"handedness: no alpha key in this braid scene ({exc}); sweeping salt only",
-                  file=sys.stderr)
+        grid["alpha"] = a.alpha
     spec = sweep.load_spec({
         "scene": "braid",
-        "fixed": {"force_pN": a.force, "length_nm": a.length, "bead_spacing_nm": 3.0,
-                  "turns": list(range(-a.turns, a.turns + 1)), "steps": a.steps,
-                  "equilibration_steps": a.steps // 5, "turn_rate": 1e-4, "seed": a.seed,
-                  "frame_interval": max(100, a.steps // 10 // 100 * 100)},
+        "fixed": sweep.quick_braid_fixed(turns=a.turns, steps=a.steps, seed=a.seed,
+                                   length_nm=a.length, force_pN=a.force),
         "grid": grid,
     }, out=a.out)
     res = run_sweep_verbose(spec, workers=a.workers, scheduler=a.scheduler, quiet=a.quiet)

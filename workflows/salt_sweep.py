@@ -30,10 +30,8 @@ def main(argv=None):
     a = p.parse_args(argv)
     spec = sweep.load_spec({
         "scene": "braid",
-        "fixed": {"force_pN": a.force, "length_nm": a.length, "bead_spacing_nm": 3.0,
-                  "turns": list(range(-a.turns, a.turns + 1)), "steps": a.steps,
-                  "equilibration_steps": a.steps // 5, "turn_rate": 1e-4, "seed": a.seed,
-                  "frame_interval": max(100, a.steps // 10 // 100 * 100)},
+        "fixed": sweep.quick_braid_fixed(turns=a.turns, steps=a.steps, seed=a.seed,
+                                   length_nm=a.length, force_pN=a.force),
         "grid": {"salt_mM": a.salt},
     }, out=a.out)
     res = run_sweep_verbose(spec, workers=a.workers, scheduler=a.scheduler, quiet=a.quiet)

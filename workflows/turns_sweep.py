@@ -42,10 +42,9 @@ def main(argv=None):
     n = a.max_turns
     spec = sweep.load_spec({
         "scene": "braid",
-        "fixed": {"force_pN": a.force, "salt_mM": a.salt, "length_nm": a.length,
-                  "bead_spacing_nm": 3.0, "turns": list(range(-n, n + 1)), "steps": a.steps,
-                  "equilibration_steps": a.equilibration, "seed": a.seed,
-                  "frame_interval": max(100, a.steps // 10 // 100 * 100)},
+        "fixed": sweep.quick_braid_fixed(turns=n, steps=a.steps, seed=a.seed, length_nm=a.length,
+                                   force_pN=a.force, salt_mM=a.salt,
+                                   equilibration_steps=a.equilibration, turn_rate=None),
         "grid": {"turn_rate": a.turn_rate},
     }, out=a.out)
     res = run_sweep_verbose(spec, workers=a.workers, scheduler=a.scheduler, quiet=a.quiet)
