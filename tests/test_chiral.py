@@ -9,9 +9,8 @@ the energy to 1e-12 relative; the ideal two-ply carries alpha tan(eta/2) to 1 %.
 import math
 
 import numpy as np
-import openmm
 import pytest
-from openmm import unit as u
+from _openmm_eval import openmm_energy_forces
 
 from dnabraid import units
 from dnabraid.forcefield import load_toml
@@ -76,19 +75,6 @@ def fast_energy(pos, chains, q=1, excl=10**6):
     return ev.energy_grad(pos)
 
 
-def openmm_energy_forces(force, pos):
-    system = openmm.System()
-    for _ in range(len(pos)):
-        system.addParticle(1.0)
-    system.addForce(force)
-    ctx = openmm.Context(system, openmm.VerletIntegrator(0.001),
-                         openmm.Platform.getPlatformByName("Reference"))
-    ctx.setPositions(pos * u.nanometer)
-    st = ctx.getState(getEnergy=True, getForces=True)
-    e = units.energy_from_openmm(st.getPotentialEnergy().value_in_unit(u.kilojoule_per_mole))
-    f = units.force_from_openmm(
-        st.getForces(asNumpy=True).value_in_unit(u.kilojoule_per_mole / u.nanometer))
-    return e, np.asarray(f)
 
 
 def all_pairs(chains, excl=3, closed=False):

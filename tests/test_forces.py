@@ -6,11 +6,10 @@ twin's energy against its forces to 1e-5 relative.
 """
 
 import numpy as np
-import openmm
 import pytest
-from openmm import unit as u
+from _openmm_eval import openmm_energy_forces
 
-from dnabraid import forces, units
+from dnabraid import forces
 from dnabraid.forces import reference as ref
 
 RTOL_TWIN = 1e-6
@@ -18,20 +17,6 @@ RTOL_FD = 1e-5
 SEED = 20261122
 
 
-def openmm_energy_forces(force, pos, n=None):
-    n = len(pos) if n is None else n
-    system = openmm.System()
-    for _ in range(n):
-        system.addParticle(1.0)
-    system.addForce(force)
-    ctx = openmm.Context(system, openmm.VerletIntegrator(0.001),
-                         openmm.Platform.getPlatformByName("Reference"))
-    ctx.setPositions(pos * u.nanometer)
-    st = ctx.getState(getEnergy=True, getForces=True)
-    e = units.energy_from_openmm(st.getPotentialEnergy().value_in_unit(u.kilojoule_per_mole))
-    f = units.force_from_openmm(
-        st.getForces(asNumpy=True).value_in_unit(u.kilojoule_per_mole / u.nanometer))
-    return e, np.asarray(f)
 
 
 def finite_difference(fun, pos, h=1e-5):
