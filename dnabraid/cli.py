@@ -76,6 +76,22 @@ def cmd_run(args) -> int:
 
     print(f"dnabraid run: scene '{s.scene}' -> {out}", file=sys.stderr)
     summary = run_scene(s, out, platform=args.platform, threads=threads, progress_factory=bar)
+    if s.scene == "knot":
+        m, t = summary["measured"], summary["theory"]
+        print(f"knot n = {summary['knot_n']}, eps = {summary['eps']:.3f}, {summary['beads']} beads, "
+              f"{summary['newton_iterations']} Newton iterations, largest OpenMM force left "
+              f"{summary['openmm_max_force_pN']:.2g} pN")
+        print(f"{'':<24} {'bead model':>12} {'theory':>12}")
+        print(f"{'loop radius (apex) nm':<24} {m['radius_apex_nm']:>12.2f} {t['radius_nm']:>12.2f}")
+        print(f"{'shortening / 2 pi nm':<24} {m['radius_dL_nm']:>12.2f} {t['radius_nm']:>12.2f}")
+        print(f"{'braid length nm':<24} {m['braid_length_nm']:>12.2f} {t['braid_length_nm']:>12.2f}")
+        print(f"{'wave number 1/nm':<24} {m['wave_number_per_nm']:>12.4f} "
+              f"{t['wave_number_per_nm']:>12.4f}")
+        print(f"{'winding turns':<24} {m['winding_turns']:>12.3f} {t['winding_turns']:>12d}")
+        for n in summary["notes"]:
+            print(f"note: {n}")
+        print(f"wall time {summary['wall_time_s']:.1f} s; results in {out}/")
+        return 0
     print(f"time step {summary['time_step_ps']:.4g} ps: {summary['time_step_reason']}")
     for n in summary["notes"]:
         print(f"note: {n}")

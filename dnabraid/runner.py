@@ -77,6 +77,10 @@ def run_scene(scene: Scene, out: str, *, platform: str = "CPU", threads: int | N
     progress_factory : callable(total_steps) -> object with update(n) and close(), optional
         For a progress bar (the CLI passes tqdm).
     """
+    if scene.scene == "knot":
+        from .knot import run_knot_scene
+
+        return run_knot_scene(scene, out)
     t0 = time.perf_counter()
     model = build(scene)
     engine = Engine(model, platform=platform, seed=scene.seed, threads=threads)

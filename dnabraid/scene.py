@@ -28,7 +28,7 @@ class SceneError(ValueError):
 
 # Key metadata: name -> (unit, help). Defaults live on the dataclass.
 KEY_DOCS: dict[str, tuple[str, str]] = {
-    "scene": ("", "scene kind: braid | tether | plectoneme"),
+    "scene": ("", "scene kind: braid | tether | plectoneme | knot"),
     "force_pN": ("pN", "constant force pulling the magnetic bead up (> 0)"),
     "turns": ("turns", "list of bead turn values n (catenation imposed by the rotational trap)"),
     "salt_mM": ("mM", "monovalent salt; sets the effective DNA diameter (Stigter 1977)"),
@@ -57,9 +57,18 @@ KEY_DOCS: dict[str, tuple[str, str]] = {
     "twist_persistence_nm": ("nm", "twist persistence length C of torsionally constrained DNA "
                              "(plectoneme scene; Moroz & Nelson 1997, Bryant et al. 2003: "
                              "C ~ 100 nm; twist-stretch coupling is left out)"),
+    "knot_n": ("", "knot scene: unknotting number n of the open (2, 2n+1) torus knot "
+               "(1 trefoil, 2 cinquefoil, ...; seed 001)"),
+    "tension_pN": ("pN", "knot scene: tension T pulling both ends"),
+    "rod_radius_nm": ("nm", "knot scene: rod radius h (contact at 2h)"),
+    "bending_stiffness_pN_nm2": ("pN nm^2", "knot scene: bending stiffness B = EI"),
+    "start_loop_factor": ("", "knot scene: loop radius of the starting shape / sqrt(B / 2T) "
+                          "(> 1 tightens, < 1 loosens; the bead contact pins sliding)"),
 }
 
-_BRAID_KEYS = set(KEY_DOCS) - {"scene", "twist_persistence_nm"}
+_KNOT_KEYS = {"knot_n", "tension_pN", "rod_radius_nm", "bending_stiffness_pN_nm2",
+              "start_loop_factor", "bead_spacing_nm"}
+_BRAID_KEYS = set(KEY_DOCS) - {"scene", "twist_persistence_nm"} - _KNOT_KEYS | {"bead_spacing_nm"}
 _TETHER_KEYS = _BRAID_KEYS - {"tether_separation_nm", "trap_stiffness_pN_nm", "turn_rate"}
 _PLECTONEME_KEYS = _TETHER_KEYS | {"trap_stiffness_pN_nm", "turn_rate", "twist_persistence_nm"}
 
@@ -107,6 +116,11 @@ class Scene:
     timestep_safety: float = 0.3
     alpha: float = 0.0
     twist_persistence_nm: float = 100.0
+    knot_n: int = 1
+    tension_pN: float = 0.8
+    rod_radius_nm: float = 1.0
+    bending_stiffness_pN_nm2: float = 1000.0
+    start_loop_factor: float = 1.0
 
     # -- derived ---------------------------------------------------------------
     @property
@@ -162,7 +176,9 @@ def allowed_keys(kind: str) -> set:
         return set(_TETHER_KEYS)
     if kind == "plectoneme":
         return set(_PLECTONEME_KEYS)
-    raise SceneError(f"unknown scene {kind!r}; built-in scenes are: braid, tether, plectoneme")
+    if kind == "knot":
+        return set(_KNOT_KEYS)
+    raise SceneError(f"unknown scene {kind!r}; built-in scenes are: braid, tether, plectoneme, knot")
 
 
 BUILTIN = {
@@ -170,12 +186,16 @@ BUILTIN = {
     "tether": {"turns": [0.0], "force_pN": 1.0, "length_nm": 300.0},
     "plectoneme": {"turns": [0.0, 1.0, 2.0, 3.0, 4.0, 5.0, 6.0], "force_pN": 1.0,
                    "length_nm": 300.0},
+    "knot": {"bead_spacing_nm": 0.5},
 }
 
 SCENE_HELP = {
     "braid": "two nicked DNA molecules between a surface and a magnetic bead, braided by "
     "turning the bead: extension, torque and catenation against turns",
     "tether": "one nicked DNA molecule between surface and bead under force: force-extension",
+    "knot": "an open (2, 2n+1) knot (trefoil, cinquefoil, ...) tied in an elastic rod pulled "
+    "by a tension, relaxed at zero temperature (no tweezer bead, surface or electrostatics): "
+    "loop radius, braid length and wave number against the continuum theory (seeds 001, 002)",
     "plectoneme": "one torsionally constrained DNA molecule between surface and bead under "
     "force, turned n times: extension and torque against turns (the hat curve), buckling, "
     "twist, writhe and plectonemes",
@@ -356,6 +376,9 @@ def validate(s: Scene) -> None:
             unit = KEY_DOCS[key][0]
             raise SceneError(f"{key}={getattr(s, key)!r}{' ' + unit if unit else ''}: {msg}")
 
+    if s.scene == "knot":
+        validate_knot(s, need)
+        return
     need(s.force_pN > 0, "force_pN", "the pulling force must be > 0 pN")
     need(s.force_pN <= 100, "force_pN", "above ~65 pN DNA overstretches; this model allows <= 100 pN")
     need(s.salt_mM > 0, "salt_mM", "salt must be > 0 mM")
@@ -419,3 +442,33 @@ def validate(s: Scene) -> None:
         need(max(abs(t) for t in s.turns) <= n_lock, "turns",
              f"|turns| must be <= {n_lock:.2f}: more turns than a {s.length_nm} nm braid of "
              f"diameter {d:.2f} nm can hold at the 45-degree lock-up (L / (sqrt(2) pi d))")
+
+
+#: Largest eps = sqrt(h / R) of the knot scene: seed 002 (Fig. 6) computes a tight trefoil at
+#: eps = 0.52; beyond, the loop is shorter than the braid around it.
+MAX_KNOT_EPS = 0.55
+#: Largest bead count of the knot scene (its Newton solve is ~O(N) per iteration).
+MAX_KNOT_BEADS = 20000
+
+
+def validate_knot(s: Scene, need) -> None:
+    need(1 <= s.knot_n <= 10, "knot_n", "must be 1 (trefoil) ... 10")
+    need(s.tension_pN > 0, "tension_pN", "must be > 0 pN")
+    need(s.rod_radius_nm > 0, "rod_radius_nm", "must be > 0")
+    need(s.bending_stiffness_pN_nm2 > 0, "bending_stiffness_pN_nm2", "must be > 0")
+    need(0.5 <= s.start_loop_factor <= 2.0, "start_loop_factor", "must be in [0.5, 2]")
+    need(s.bead_spacing_nm <= s.rod_radius_nm, "bead_spacing_nm",
+         f"must be <= rod_radius_nm={s.rod_radius_nm} (coarser beads let the strands slip "
+         "through each other and corrugate the contact)")
+    R = math.sqrt(s.bending_stiffness_pN_nm2 / (2.0 * s.tension_pN))
+    eps = math.sqrt(s.rod_radius_nm / R)
+    need(eps <= MAX_KNOT_EPS, "tension_pN",
+         f"gives eps = sqrt(h/R) = {eps:.3f} > {MAX_KNOT_EPS} (loop radius R = sqrt(B/2T) = "
+         f"{R:.3g} nm): tighter than the tightest elastic knot computed (seed 002, eps 0.52); "
+         "lower the tension")
+    length = 2 * math.pi * R * 1.5 + 3.0 * math.sqrt(s.bending_stiffness_pN_nm2 / s.tension_pN) \
+        + 4 * (s.knot_n + 1) * 3.5 * math.sqrt(2 * s.rod_radius_nm * R)
+    beads = length / s.bead_spacing_nm
+    need(beads <= MAX_KNOT_BEADS, "tension_pN",
+         f"needs ~{beads:.0f} beads (> {MAX_KNOT_BEADS}): the knot is too loose for this "
+         "bead spacing; raise the tension or bead_spacing_nm")

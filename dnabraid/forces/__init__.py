@@ -8,6 +8,7 @@ one it means. Every energy has a numpy twin in :mod:`dnabraid.forces.reference`
 """
 
 from .bonded import bending_force, stretch_force
+from .contact import contact_exclusion_range, contact_force
 from .excluded import wca_exclusions, wca_force
 from .external import bead_exclusion_force, pull_force, trap_force, wall_force
 from .twist import frame_springs, twist_anchor_force, twist_bead_force, twist_force
@@ -17,6 +18,8 @@ __all__ = [
     "stretch_force",
     "wca_force",
     "wca_exclusions",
+    "contact_force",
+    "contact_exclusion_range",
     "wall_force",
     "pull_force",
     "trap_force",

@@ -116,3 +116,24 @@ def trap_torque(pos, p1, p2, K, angle):
     u = np.asarray(pos, float)[p2] - np.asarray(pos, float)[p1]
     phi = np.arctan2(u[..., 1], u[..., 0])
     return -K * np.sin(phi - angle)
+
+
+def contact(pos, thickness, k, exclusion_range):
+    """U = sum k/2 (2h - r)^2 over bead pairs with r < 2h more than ``exclusion_range`` apart."""
+    from scipy.spatial import cKDTree
+
+    pos = np.asarray(pos, float)
+    d0 = 2.0 * thickness
+    pairs = np.array(sorted(cKDTree(pos).query_pairs(d0)), dtype=int).reshape(-1, 2)
+    pairs = pairs[np.abs(pairs[:, 1] - pairs[:, 0]) > exclusion_range]
+    f = np.zeros_like(pos)
+    if len(pairs) == 0:
+        return 0.0, f
+    d = pos[pairs[:, 1]] - pos[pairs[:, 0]]
+    r = np.linalg.norm(d, axis=1)
+    pen = np.clip(d0 - r, 0.0, None)
+    e = 0.5 * k * np.sum(pen**2)
+    g = (-k * pen / r)[:, None] * d  # dU/d(r_j)
+    np.add.at(f, pairs[:, 0], g)
+    np.add.at(f, pairs[:, 1], -g)
+    return e, f
