@@ -196,7 +196,7 @@ def energy(x, prob: _Problem) -> float:
     return float(sum(energy_terms(x, prob).values()))
 
 
-def _pair_blocks(d, r, k, r0, gauss_newton: bool):
+def _pair_blocks(d, r, k: float, r0: float, gauss_newton: bool):
     """Gradient wrt the pair vector d and its 3x3 Hessian for U = k/2 (r - r0)^2."""
     u = d / r[:, None]
     g = (k * (r - r0))[:, None] * u
@@ -204,9 +204,7 @@ def _pair_blocks(d, r, k, r0, gauss_newton: bool):
     fac = k * (r - r0) / r
     if gauss_newton:
         fac = np.maximum(fac, 0.0)
-    H = k[:, None, None] * uu + fac[:, None, None] * (np.eye(3) - uu) if np.ndim(k) else \
-        k * uu + fac[:, None, None] * (np.eye(3) - uu)
-    return g, H
+    return g, k * uu + fac[:, None, None] * (np.eye(3) - uu)
 
 
 def gradient_hessian(x, prob: _Problem, *, gauss_newton: bool = True):
@@ -391,9 +389,8 @@ def _lowest_mode(x, prob: _Problem):
     t = np.zeros(n3)
     t[2::3] = 1.0 / math.sqrt(n3 / 3)
     shift = 1e-6 * prob.rod.stretch_modulus_pN / prob.rod.bead_spacing_nm
-    Hs = H + shift * sp.csr_matrix(np.outer(t, t)) * 0 + sp.identity(n3) * 0
     try:
-        lam, vec = spla.eigsh(Hs.tocsc(), k=4, sigma=-shift, which="LM")
+        lam, vec = spla.eigsh(H.tocsc(), k=4, sigma=-shift, which="LM")
     except Exception as exc:  # noqa: BLE001 - ARPACK failures are reported, not fatal
         raise KnotError(f"could not compute the Hessian's lowest mode: {exc}") from exc
     keep = np.abs(vec.T @ t) < 0.9

@@ -22,16 +22,21 @@ def _perturbed(rod):
     return x0, x0 + 0.05 * np.random.default_rng(SEED).normal(size=x0.shape)
 
 
+def _central(f, x, i, h=1e-6):
+    """Central difference of f (a function of the flat coordinates) along coordinate i."""
+    xp, xm = x.ravel().copy(), x.ravel().copy()
+    xp[i] += h
+    xm[i] -= h
+    return (f(xp.reshape(-1, 3)) - f(xm.reshape(-1, 3))) / (2 * h)
+
+
 def test_gradient_matches_finite_differences_and_reference_twins(rod):
     x0, x = _perturbed(rod)
     prob = K.make_problem(rod, x0)
     g, _ = K.gradient_hessian(x, prob, gauss_newton=False)
     rng = np.random.default_rng(SEED)
     for i in rng.choice(x.size, 15, replace=False):
-        xp, xm = x.ravel().copy(), x.ravel().copy()
-        xp[i] += 1e-6
-        xm[i] -= 1e-6
-        fd = (K.energy(xp.reshape(-1, 3), prob) - K.energy(xm.reshape(-1, 3), prob)) / 2e-6
+        fd = _central(lambda y: K.energy(y, prob), x, i)
         assert fd == pytest.approx(g[i], abs=1e-4 * max(1.0, abs(g[i])))
     # the chain and contact terms against the independent numpy twins
     b = rod.bead_spacing_nm
@@ -53,12 +58,7 @@ def test_hessian_matches_finite_differences(rod):
     _, H = K.gradient_hessian(x, prob, gauss_newton=False)
     rng = np.random.default_rng(SEED)
     for i in rng.choice(x.size, 8, replace=False):
-        xp, xm = x.ravel().copy(), x.ravel().copy()
-        xp[i] += 1e-6
-        xm[i] -= 1e-6
-        gp, _ = K.gradient_hessian(xp.reshape(-1, 3), prob, gauss_newton=False)
-        gm, _ = K.gradient_hessian(xm.reshape(-1, 3), prob, gauss_newton=False)
-        col = (gp - gm) / 2e-6
+        col = _central(lambda y: K.gradient_hessian(y, prob, gauss_newton=False)[0], x, i)
         assert np.abs(col - H[:, i].toarray().ravel()).max() <= 1e-6 * max(1.0, np.abs(col).max())
 
 
