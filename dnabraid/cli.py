@@ -9,13 +9,17 @@
 from __future__ import annotations
 
 import argparse
-import dataclasses
 import json
 import logging
 import os
 import sys
 
-from . import scene as scn
+from . import scenes as scn
+from .engine import PlatformError, pin_to_one_core
+from .rundir import RunDirError
+
+#: Errors that are the user's input, printed without a traceback (anything else is a bug).
+USER_ERRORS = (scn.SceneError, RunDirError, PlatformError, FileNotFoundError)
 
 
 def _parse_sets(items) -> dict:
@@ -29,83 +33,38 @@ def _parse_sets(items) -> dict:
 
 
 def cmd_scenes(args) -> int:
-    defaults = scn.Scene()
-    for name in scn.BUILTIN:
-        print(f"{name}: {scn.SCENE_HELP[name]}")
-        base = dataclasses.replace(defaults, scene=name, **{
-            k: (tuple(v) if isinstance(v, list) else v) for k, v in scn.BUILTIN[name].items()})
-        for key in sorted(scn.allowed_keys(name)):
-            unit, help_ = scn.KEY_DOCS[key]
-            val = getattr(base, key)
+    for name, cls in scn.SCENES.items():
+        print(f"{name}: {cls.help}")
+        for k, info in sorted(cls.keys().items()):
+            val = info.default
             if isinstance(val, tuple):
                 val = "[" + ",".join(f"{x:g}" for x in val) + "]"
-            print(f"    {key:<24} = {val!s:<14} {('[' + unit + ']') if unit else '':<14} {help_}")
+            unit = f"[{info.unit}]" if info.unit else ""
+            print(f"    {k:<24} = {val!s:<14} {unit:<14} {info.help}")
         print()
     return 0
 
 
-def _pin_to_one_core() -> None:
-    """Pin the process to one core: OpenMM's CPU platform hands forces to a worker
-    thread, and for small systems the hand-off costs more than the force (measured up to
-    3-4x faster pinned; workflows/benchmark_engine.py)."""
-    try:
-        cores = sorted(os.sched_getaffinity(0))
-        os.sched_setaffinity(0, {cores[0]})
-    except (AttributeError, OSError):  # pragma: no cover - not on Linux
-        pass
-
-
 def cmd_run(args) -> int:
-    from .runner import run_scene
-
     overrides = _parse_sets(args.set)
     if args.seed is not None:
         overrides["seed"] = args.seed
     s = scn.make_scene(args.scene, overrides)
-    out = args.out or os.path.join("runs", s.scene)
+    out = args.out or os.path.join("runs", s.name)
     threads = args.threads
     if args.platform == "CPU" and not args.no_pin and (threads in (None, 1)):
-        _pin_to_one_core()
+        pin_to_one_core()
         threads = 1
 
     def bar(total):
         from tqdm import tqdm
 
-        return tqdm(total=total, unit="step", unit_scale=True, desc=f"{s.scene}",
+        return tqdm(total=total, unit="step", unit_scale=True, desc=s.name,
                     disable=args.quiet, dynamic_ncols=True)
 
-    print(f"dnabraid run: scene '{s.scene}' -> {out}", file=sys.stderr)
-    summary = run_scene(s, out, platform=args.platform, threads=threads, progress_factory=bar)
-    if s.scene == "knot":
-        m, t = summary["measured"], summary["theory"]
-        print(f"knot n = {summary['knot_n']}, eps = {summary['eps']:.3f}, {summary['beads']} beads, "
-              f"{summary['newton_iterations']} Newton iterations, largest OpenMM force left "
-              f"{summary['openmm_max_force_pN']:.2g} pN")
-        print(f"{'':<24} {'bead model':>12} {'theory':>12}")
-        print(f"{'loop radius (apex) nm':<24} {m['radius_apex_nm']:>12.2f} {t['radius_nm']:>12.2f}")
-        print(f"{'shortening / 2 pi nm':<24} {m['radius_dL_nm']:>12.2f} {t['radius_nm']:>12.2f}")
-        print(f"{'braid length nm':<24} {m['braid_length_nm']:>12.2f} {t['braid_length_nm']:>12.2f}")
-        print(f"{'wave number 1/nm':<24} {m['wave_number_per_nm']:>12.4f} "
-              f"{t['wave_number_per_nm']:>12.4f}")
-        print(f"{'winding turns':<24} {m['winding_turns']:>12.3f} {t['winding_turns']:>12d}")
-        for n in summary["notes"]:
-            print(f"note: {n}")
-        print(f"wall time {summary['wall_time_s']:.1f} s; results in {out}/")
-        return 0
-    print(f"time step {summary['time_step_ps']:.4g} ps: {summary['time_step_reason']}")
-    for n in summary["notes"]:
-        print(f"note: {n}")
-    print(f"{'turns':>7} {'extension_nm':>20} {'torque_pN_nm':>20} {'catenation':>18}")
-
-    def fmt(d, p=2):
-        if d["mean"] is None:
-            return "-"
-        return f"{d['mean']:.{p}f} +- {d['sem']:.{p}f}"
-
-    for pt in summary["points"]:
-        print(f"{pt['turns']:>7g} {fmt(pt['extension_nm'], 1):>20} "
-              f"{fmt(pt['torque_pN_nm'], 1):>20} {fmt(pt['catenation'], 3):>18}")
-    print(f"wall time {summary['wall_time_s']:.1f} s on {summary['platform']}; results in {out}/")
+    print(f"dnabraid run: scene '{s.name}' -> {out}", file=sys.stderr)
+    summary = s.run(out, platform=args.platform, threads=threads, progress_factory=bar)
+    s.report(summary, out, sys.stdout)
     return 0
 
 
@@ -118,7 +77,7 @@ def run_sweep_verbose(spec, *, workers=None, scheduler=None, platform="CPU", qui
 
     from . import sweep as swp
 
-    print(f"dnabraid sweep: {len(spec.points)} points of scene '{spec.points[0].scene.scene}' "
+    print(f"dnabraid sweep: {len(spec.points)} points of scene '{spec.points[0].scene.name}' "
           f"-> {spec.out}" + (f" on Dask scheduler {scheduler}" if scheduler else ""),
           file=sys.stderr)
     bar = tqdm(total=len(spec.points), unit="point", desc="sweep", disable=quiet,
@@ -217,7 +176,7 @@ def main(argv=None) -> int:
     logging.basicConfig(level=logging.WARNING, format="%(levelname)s %(name)s: %(message)s")
     try:
         return args.func(args)
-    except (scn.SceneError, FileNotFoundError, ValueError, ImportError) as exc:
+    except USER_ERRORS as exc:
         print(f"dnabraid: error: {exc}", file=sys.stderr)
         return 2
     except BrokenPipeError:  # output piped into `head` and the like: not an error

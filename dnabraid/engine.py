@@ -10,7 +10,6 @@ import openmm
 from openmm import unit as u
 
 from . import units
-from .build import Model
 
 log = logging.getLogger(__name__)
 
@@ -19,6 +18,39 @@ log = logging.getLogger(__name__)
 GAMMA_PER_PS = 1.0
 #: A bond longer than this multiple of its rest length means the integration blew up.
 MAX_BOND_STRETCH = 1.5
+
+
+#: Largest scene seed: OpenMM takes seeds in [1, 2^31 - 1] (0 means "pick one at random").
+MAX_SEED = 2**31 - 2
+
+
+def integrator_seed(seed: int) -> int:
+    """OpenMM seed of a scene seed: seed + 1, one-to-one on [0, MAX_SEED].
+
+    (The earlier ``seed % (2^31 - 1) or 1`` gave seeds 0, 1 and 2^31 - 1 the same stream.)
+    """
+    seed = int(seed)
+    if not 0 <= seed <= MAX_SEED:
+        raise ValueError(f"seed must be in [0, {MAX_SEED}], got {seed}")
+    return seed + 1
+
+
+class PlatformError(ValueError):
+    """The requested OpenMM platform is not available here."""
+
+
+def pin_to_one_core() -> None:
+    """Pin this process to one core.
+
+    OpenMM's CPU platform hands forces to a worker thread; for small systems the hand-off
+    costs more than the force (measured up to 3-4x faster pinned;
+    workflows/benchmark_engine.py).
+    """
+    try:
+        cores = sorted(os.sched_getaffinity(0))
+        os.sched_setaffinity(0, {cores[0]})
+    except (AttributeError, OSError):  # pragma: no cover - not on Linux
+        pass
 
 
 class SimulationBlowUp(RuntimeError):
@@ -46,7 +78,7 @@ def available_platforms() -> list[str]:
 
 
 class Engine:
-    """Brownian dynamics of a built :class:`~dnabraid.build.Model`.
+    """Brownian dynamics of a built :class:`~dnabraid.chains.Model`.
 
     Parameters
     ----------
@@ -59,19 +91,20 @@ class Engine:
         CPU platform threads.
     """
 
-    def __init__(self, model: Model, platform: str = "CPU", seed: int = 1,
+    def __init__(self, model, platform: str = "CPU", seed: int = 1,
                  threads: int | None = None):
         self.model = model
         scene = model.scene
-        self.dt_ns = model.params["time_step_ns"]
+        self.dt_ns = model.timestep.time_step_ns
         self.integrator = openmm.BrownianIntegrator(
             scene.temperature_K * u.kelvin, GAMMA_PER_PS / u.picosecond,
             units.ns_to_ps(self.dt_ns) * u.picoseconds)
-        self.integrator.setRandomNumberSeed(int(seed) % (2**31 - 1) or 1)
+        self.seed = integrator_seed(seed)
+        self.integrator.setRandomNumberSeed(self.seed)
         self.integrator.setConstraintTolerance(1e-6)
         names = available_platforms()
         if platform not in names:
-            raise ValueError(f"platform {platform!r} is not available here; available: "
+            raise PlatformError(f"platform {platform!r} is not available here; available: "
                              + ", ".join(names))
         plat = openmm.Platform.getPlatformByName(platform)
         props = {}
@@ -124,6 +157,24 @@ class Engine:
             fh.write(openmm.XmlSerializer.serialize(st))
         os.replace(tmp, path)
         return path
+
+    def save_checkpoint(self, path: str) -> str:
+        """Write the full state (positions, parameters, random-number state) and the step
+        counter to ``path``, atomically (``Context.createCheckpoint``; same platform only)."""
+        data = self.context.createCheckpoint()
+        tmp = path + ".tmp"
+        with open(tmp, "wb") as fh:
+            fh.write(int(self.step).to_bytes(8, "little"))
+            fh.write(data)
+        os.replace(tmp, path)
+        return path
+
+    def load_checkpoint(self, path: str) -> None:
+        """Restore a state written by :meth:`save_checkpoint` (the run continues exactly)."""
+        with open(path, "rb") as fh:
+            raw = fh.read()
+        self.step = int.from_bytes(raw[:8], "little")
+        self.context.loadCheckpoint(raw[8:])
 
     def load_state(self, path: str) -> None:
         with open(path) as fh:

@@ -1,37 +1,127 @@
-"""Reporters: a self-describing run directory.
+"""Reporters: observables and frames streamed to disk while a point runs.
 
-``scene.toml`` (resolved scene), ``topology.pdb`` + ``trajectory.dcd`` (open with
-``MDAnalysis.Universe``), ``observables.csv`` (units in headers), ``summary.json``,
-``extension_torque.png``. Files are written to a temporary name and renamed, so a
-crash never leaves a half-written result.
+Each point of a schedule writes, as it runs, into its own directory
+``points/<index>_turns<value>/``:
+
+* ``samples.csv``: step, time and every per-sample observable (units in the header);
+* ``frames.csv``: frame number, step, time and every per-frame observable;
+* ``trajectory.dcd``: one frame per ``frame_interval`` (OpenMM's ``DCDFile``).
+
+Nothing is held in memory for the whole run. When a point finishes, the runner writes the
+engine checkpoint and ``done.json``; a point without ``done.json`` is rerun from the
+previous checkpoint. :func:`combine` writes the run directory's ``observables.csv``,
+``frames.csv`` and ``trajectory.dcd`` from the finished points, reading them back from
+disk. Numbers are written with ``repr`` precision, so statistics computed from the files
+are the same whether or not the run was interrupted.
 """
 
 from __future__ import annotations
 
 import csv
-import json
 import math
 import os
-import platform as _platform
-import sys
 
 import numpy as np
 
-from .analysis.stats import mean_sem
 
-
-def atomic_write_text(path: str, text: str) -> None:
-    tmp = path + ".tmp"
-    with open(tmp, "w") as fh:
-        fh.write(text)
-    os.replace(tmp, path)
-
+__all__ = ["PointWriter", "combine", "read_point", "MIN_N_EFF", "mean_sem_entry"]
 
 #: An autocorrelation-corrected SEM is trusted when the run holds this many correlation times.
 MIN_N_EFF = 20
 
 
-def _ms(x) -> dict:
+def _num(v) -> str:
+    if v is None or (isinstance(v, float) and math.isnan(v)):
+        return ""
+    return repr(float(v))
+
+
+def _header(cols: dict) -> list[str]:
+    return list(cols)
+
+
+class PointWriter:
+    """Stream one point's samples, frames and trajectory (a context manager).
+
+    Parameters
+    ----------
+    path : str
+        The point's directory (created).
+    topology : openmm.app.Topology
+    dt_ps : float
+    frame_interval : int
+    sample_columns, frame_columns : dict name -> (unit, meaning)
+    turns : float
+    """
+
+    def __init__(self, path, topology, dt_ps, frame_interval, sample_columns, frame_columns,
+                 turns):
+        self.path = path
+        self.topology = topology
+        self.dt_ps = float(dt_ps)
+        self.frame_interval = int(frame_interval)
+        self.sc = list(sample_columns)
+        self.fc = list(frame_columns)
+        self.turns = float(turns)
+        self._files = []
+
+    def __enter__(self):
+        from openmm import app
+
+        os.makedirs(self.path, exist_ok=True)
+        self._s = open(os.path.join(self.path, "samples.csv"), "w", newline="")  # noqa: SIM115
+        self._f = open(os.path.join(self.path, "frames.csv"), "w", newline="")  # noqa: SIM115
+        self._d = open(os.path.join(self.path, "trajectory.dcd"), "wb")  # noqa: SIM115
+        self._files = [self._s, self._f, self._d]
+        self.sw = csv.writer(self._s)
+        self.fw = csv.writer(self._f)
+        self.sw.writerow(["turns", "step", "time_ns"] + self.sc)
+        self.fw.writerow(["turns", "frame", "step", "time_ns"] + self.fc)
+        self.dcd = app.DCDFile(self._d, self.topology, self.dt_ps, 0,
+                               max(1, self.frame_interval))
+        self.n_frames = 0
+        return self
+
+    def sample(self, step: int, values: dict) -> None:
+        t = step * self.dt_ps * 1e-3
+        self.sw.writerow([repr(self.turns), int(step), repr(t)]
+                         + [_num(values.get(c)) for c in self.sc])
+
+    def frame(self, step: int, pos_nm, values: dict) -> None:
+        from openmm import unit as u
+
+        t = step * self.dt_ps * 1e-3
+        self.fw.writerow([repr(self.turns), self.n_frames, int(step), repr(t)]
+                         + [_num(values.get(c)) for c in self.fc])
+        self.dcd.writeModel(np.asarray(pos_nm, float) * u.nanometer)
+        self.n_frames += 1
+
+    def __exit__(self, *exc):
+        for fh in self._files:
+            fh.close()
+        return False
+
+
+def _read_csv(path) -> dict:
+    with open(path, newline="") as fh:
+        rows = list(csv.reader(fh))
+    head, body = rows[0], rows[1:]
+    out = {}
+    for j, name in enumerate(head):
+        out[name] = np.array([float(r[j]) if r[j] != "" else np.nan for r in body])
+    return out
+
+
+def read_point(path: str) -> tuple[dict, dict]:
+    """The samples and frames of a finished point: two dicts column -> ndarray."""
+    return (_read_csv(os.path.join(path, "samples.csv")),
+            _read_csv(os.path.join(path, "frames.csv")))
+
+
+def mean_sem_entry(x) -> dict:
+    """Mean and autocorrelation-corrected SEM of one series (the single-run diagnostic)."""
+    from .analysis.stats import mean_sem
+
     x = np.asarray(x, float)
     if x.size == 0 or not np.all(np.isfinite(x)):
         return {"mean": None, "sem": None}
@@ -41,74 +131,59 @@ def _ms(x) -> dict:
             "sem_reliable": bool(r["n_eff"] >= MIN_N_EFF)}
 
 
-def summarise_points(results) -> list[dict]:
-    """Per turn value: mean and autocorrelation-corrected SEM of each observable."""
-    pts = []
-    for r in results:
-        pts.append({
-            "turns": float(r.turns),
-            "extension_nm": _ms(r.extension_nm),
-            "torque_pN_nm": _ms(r.torque_pN_nm),
-            "catenation": _ms(r.catenation),
-            "bead_angle_turns": _ms(r.bead_angle_turns),
-            "n_samples": int(len(r.step)),
-            "n_frames": int(len(r.frame_step)),
-        })
-    return pts
+def combine(out: str, point_dirs: list[str], topology, dt_ps: float, frame_interval: int,
+            sample_columns: dict, frame_columns: dict) -> None:
+    """Write ``observables.csv``, ``frames.csv`` and ``trajectory.dcd`` of the whole run.
 
-
-def write_topology(path: str, topology, positions_nm) -> None:
+    ``observables.csv`` has one row per sample (per-frame observables filled in at the
+    samples that coincide with a frame); ``frames.csv`` says which turn value and step
+    each frame of ``trajectory.dcd`` belongs to.
+    """
     from openmm import app
     from openmm import unit as u
 
-    tmp = path + ".tmp"
-    with open(tmp, "w") as fh:
-        app.PDBFile.writeFile(topology, np.asarray(positions_nm) * u.nanometer, fh)
-    os.replace(tmp, path)
+    sc, fc = list(sample_columns), list(frame_columns)
+    tmp_obs = os.path.join(out, "observables.csv.tmp")
+    tmp_fr = os.path.join(out, "frames.csv.tmp")
+    tmp_dcd = os.path.join(out, "trajectory.dcd.tmp")
+    frame_no = 0
+    with open(tmp_obs, "w", newline="") as fo, open(tmp_fr, "w", newline="") as ff, \
+            open(tmp_dcd, "wb") as fd:
+        wo, wf = csv.writer(fo), csv.writer(ff)
+        wo.writerow(["turns", "step", "time_ns"] + sc + fc)
+        wf.writerow(["frame", "turns", "step", "time_ns", "point"] + fc)
+        dcd = app.DCDFile(fd, topology, dt_ps, 0, max(1, int(frame_interval)))
+        for pdir in point_dirs:
+            s, f = read_point(pdir)
+            at = {int(st): i for i, st in enumerate(f["step"])}
+            for i in range(len(s["step"])):
+                st = int(s["step"][i])
+                j = at.get(st)
+                wo.writerow([repr(float(s["turns"][i])), st, repr(float(s["time_ns"][i]))]
+                            + [_num(s[c][i]) for c in sc]
+                            + [_num(f[c][j]) if j is not None else "" for c in fc])
+            for j in range(len(f["step"])):
+                wf.writerow([frame_no, repr(float(f["turns"][j])), int(f["step"][j]),
+                             repr(float(f["time_ns"][j])), os.path.basename(pdir)]
+                            + [_num(f[c][j]) for c in fc])
+                frame_no += 1
+            if len(f["step"]):
+                for xyz in _dcd_frames(os.path.join(pdir, "trajectory.dcd")):
+                    dcd.writeModel(xyz * u.nanometer)
+    os.replace(tmp_obs, os.path.join(out, "observables.csv"))
+    os.replace(tmp_fr, os.path.join(out, "frames.csv"))
+    os.replace(tmp_dcd, os.path.join(out, "trajectory.dcd"))
 
 
-def write_dcd(path: str, topology, frames_nm, dt_ps: float, interval: int) -> None:
-    from openmm import app
-    from openmm import unit as u
+def _dcd_frames(path):
+    """Yield the frames (nm) of a DCD file one at a time (MDAnalysis' reader)."""
+    from MDAnalysis.coordinates.DCD import DCDReader
 
-    tmp = path + ".tmp"
-    with open(tmp, "wb") as fh:
-        dcd = app.DCDFile(fh, topology, dt_ps, 0, max(1, int(interval)))
-        for fr in frames_nm:
-            dcd.writeModel(np.asarray(fr, float) * u.nanometer)
-    os.replace(tmp, path)
-
-
-def write_observables(path: str, results, dt_ns: float) -> None:
-    tmp = path + ".tmp"
-    with open(tmp, "w", newline="") as fh:
-        w = csv.writer(fh)
-        w.writerow(["turns", "step", "time_ns", "extension_nm", "torque_pN_nm",
-                    "bead_angle_turns", "catenation"])
-        for r in results:
-            cat = dict(zip(r.frame_step.astype(int).tolist(), r.catenation.tolist()))
-            for i in range(len(r.step)):
-                st = int(r.step[i])
-                c = cat.get(st, "")
-                w.writerow([r.turns, st, f"{st * dt_ns:.6g}", f"{r.extension_nm[i]:.6g}",
-                            "" if math.isnan(r.torque_pN_nm[i]) else f"{r.torque_pN_nm[i]:.6g}",
-                            "" if math.isnan(r.bead_angle_turns[i]) else
-                            f"{r.bead_angle_turns[i]:.6g}",
-                            "" if c == "" or (isinstance(c, float) and math.isnan(c)) else
-                            f"{c:.6g}"])
-    os.replace(tmp, path)
+    r = DCDReader(path)
+    try:
+        for ts in r:
+            yield ts.positions.astype(float) / 10.0  # MDAnalysis works in Angstrom
+    finally:
+        r.close()
 
 
-def versions() -> dict:
-    import openmm
-    import scipy
-
-    from . import __version__
-
-    return {"dnabraid": __version__, "openmm": openmm.__version__, "numpy": np.__version__,
-            "scipy": scipy.__version__, "python": sys.version.split()[0],
-            "machine": _platform.platform()}
-
-
-def write_summary(path: str, summary: dict) -> None:
-    atomic_write_text(path, json.dumps(summary, indent=2, default=float) + "\n")

@@ -1,160 +1,137 @@
-"""Run a scene end to end: build, simulate (resumably), write the run directory."""
+"""Run a schedule on an engine: ramp, equilibrate, sample; observables and frames streamed.
+
+:func:`run_schedule` executes every :class:`~dnabraid.protocols.Segment` of a schedule.
+Each segment starts by loading the checkpoint of the segment it starts from (or of the
+minimised initial state), so an interrupted run that is started again continues from
+exactly the same state, random-number generator included, and ends with the same numbers
+as one that was never interrupted (same platform). Finished segments are skipped.
+"""
 
 from __future__ import annotations
 
+import json
 import logging
 import os
-import sys
-import time
+import shutil
 
-if sys.version_info >= (3, 11):
-    import tomllib
-else:  # pragma: no cover
-    import tomli as tomllib
-
-from . import plots, reporters
-from .build import build
+from . import reporters, rundir
 from .engine import Engine
-from .protocols import TweezerProtocol, total_steps
-from .scene import Scene, SceneError
+from .protocols import Segment
 
 log = logging.getLogger(__name__)
 
+TWO_PI = 6.283185307179586
 
-def twist_summary(r) -> dict:
-    """Mean/SEM of the twist observables of one :class:`~dnabraid.protocols.PointResult`."""
-    import numpy as np
-
-    ms = reporters._ms
-    lk = r.twist + r.writhe
-    tip = r.plectoneme_tip_nm
-    return {"twist_torque_pN_nm": ms(r.twist_torque_pN_nm), "twist": ms(r.twist),
-            "writhe": ms(r.writhe), "linking": ms(lk),
-            "plectonemes": ms(r.plectonemes),
-            "plectoneme_length_nm": ms(r.plectoneme_length_nm),
-            "plectoneme_fraction": float(np.mean(r.plectonemes > 0)) if r.plectonemes.size
-            else None,
-            "plectoneme_tip_nm": float(np.nanmedian(tip)) if np.any(np.isfinite(tip))
-            else None}
+__all__ = ["run_schedule", "point_dir"]
 
 
-def prepare_out_dir(scene: Scene, out: str) -> bool:
-    """Create ``out`` for ``scene``; return True if it resumes an earlier run of the same scene.
-
-    Raises SceneError if ``out`` holds something else (nothing is overwritten).
-    """
-    path = os.path.join(out, "scene.toml")
-    if os.path.isdir(out) and os.listdir(out):
-        if not os.path.exists(path):
-            raise SceneError(f"output directory {out!r} exists, is not empty and holds no "
-                             "scene.toml: choose another --out")
-        with open(path, "rb") as fh:
-            old = tomllib.load(fh)
-        if old != tomllib.loads(scene.to_toml()):
-            diff = sorted(k for k in set(old) | set(scene.to_dict())
-                          if old.get(k) != tomllib.loads(scene.to_toml()).get(k))
-            raise SceneError(f"output directory {out!r} holds a run of a different scene "
-                             f"(differs in: {', '.join(diff)}); choose another --out")
-        return True
-    os.makedirs(out, exist_ok=True)
-    reporters.atomic_write_text(path, scene.to_toml())
-    return False
+def point_dir(out: str, seg: Segment) -> str:
+    return os.path.join(out, "points", seg.tag)
 
 
-def run_scene(scene: Scene, out: str, *, platform: str = "CPU", threads: int | None = None,
-              progress_factory=None) -> dict:
-    """Simulate ``scene`` into directory ``out`` and return the summary dict.
+def _observe(observables, pos, ctx, every_frame: bool) -> tuple[dict, str | None]:
+    values: dict = {}
+    for ob in observables:
+        if ob.every == "frame" and not every_frame:
+            continue
+        values.update(ob(pos, ctx, values))
+        msg = ob.check(values, ctx)
+        if msg:
+            return values, msg
+    return values, None
+
+
+def run_schedule(model, engine: Engine, schedule, observables, out: str, *, ctx: dict,
+                 progress=None) -> list[str]:
+    """Run (or skip, when finished) every segment; return the point directories in order.
 
     Parameters
     ----------
-    scene : Scene
+    model : dnabraid.chains.Model
+    engine : Engine
+    schedule : dnabraid.protocols.TurnSchedule
+    observables : list of dnabraid.observables.Observable
     out : str
-        Run directory; an existing one of the same scene is resumed.
-    platform : str
-        OpenMM platform name.
-    threads : int, optional
-        CPU threads.
-    progress_factory : callable(total_steps) -> object with update(n) and close(), optional
-        For a progress bar (the CLI passes tqdm).
+        Run directory.
+    ctx : dict
+        Context passed to observables (``trap_stiffness``, ``turn_rate``; the runner sets
+        ``trap_turns``). ``ctx["trap_parameter"]`` names the trap angle's global parameter
+        (None: the scene does not turn the bead).
+    progress : callable(int), optional
+        Called with the number of steps just taken.
     """
-    if scene.scene == "knot":
-        from .knot import run_knot_scene
-
-        return run_knot_scene(scene, out)
-    t0 = time.perf_counter()
-    model = build(scene)
-    engine = Engine(model, platform=platform, seed=scene.seed, threads=threads)
-    resumed = prepare_out_dir(scene, out)
-    total = total_steps(model)
-    bar = progress_factory(total) if progress_factory else None
-    proto = TweezerProtocol(model, engine, os.path.join(out, "checkpoints"),
-                            progress=bar.update if bar else None)
-    try:
-        results = proto.run()
-    finally:
-        if bar:
-            bar.close()
-    wall = time.perf_counter() - t0
-    p = model.params
-    dt_ns = p["time_step_ns"]
-    reporters.write_topology(os.path.join(out, "topology.pdb"), model.topology, model.positions)
-    frames = [fr for r in results for fr in r.frames]
-    reporters.write_dcd(os.path.join(out, "trajectory.dcd"), model.topology, frames,
-                        dt_ns * 1e3, scene.frame_interval)
-    reporters.write_observables(os.path.join(out, "observables.csv"), results, dt_ns)
-    n_part = model.system.getNumParticles()
-    notes = []
-    zeta_bead = p["zeta_center_pN_ns_per_nm"] if scene.n_strands == 2 else p["zeta_attach_pN_ns_per_nm"]
-    if zeta_bead < p["zeta_bead_physical_pN_ns_per_nm"]:
-        notes.append(
-            f"bead friction reduced for sampling: {zeta_bead:.3g} pN ns/nm instead of the "
-            f"physical Stokes friction {p['zeta_bead_physical_pN_ns_per_nm']:.3g} pN ns/nm of a "
-            f"{scene.bead_radius_nm} nm bead (bead_friction_factor = "
-            f"{scene.bead_friction_factor}); equilibrium averages are unaffected, times are "
-            "not physical")
-    if resumed:
-        notes.append("resumed from checkpoints; wall_time_s counts this invocation only")
-    summary = {
-        "scene": scene.to_dict(),
-        "wall_time_s": wall,
-        "platform": engine.platform,
-        "time_step_ps": dt_ns * 1e3,
-        "time_step_reason": p["time_step_reason"],
-        "relaxation_rates_per_ns": p["rates_per_ns"],
-        "total_steps": total,
-        "steps_per_second": total / wall if not resumed else None,
-        "ns_per_bead_per_step": (wall / total / n_part * 1e9) if not resumed else None,
-        "n_particles": n_part,
-        "forces": sorted(model.forces),
-        "effective_diameter_nm": p["diameter_nm"],
-        "bending_kappa_kT": p["kappa_kT"],
-        "units": {"extension": "nm", "torque": "pN nm (torque the trap applies; > 0 holds n > 0)",
-                  "catenation": "turns (Gauss linking number, strands closed by vertical rays)",
-                  "sem": "standard error of the mean, autocorrelation-corrected (Sokal window)"},
-        "notes": notes,
-        "versions": reporters.versions(),
-        "points": reporters.summarise_points(results),
-    }
-    if scene.twisted:
-        summary["units"].update({
-            "twist_torque": "pN nm, 2 pi Tw C kT / L (exact in the mean; less noisy than the "
-                            "trap torque)",
-            "twist": "turns (Tw, clamps included)",
-            "writhe": "turns (Wr, Gauss integral, chain closed by vertical rays)",
-            "linking": "turns (Tw + Wr; equals the bead angle while the DNA does not pass "
-                       "through itself)",
-            "plectonemes": "number per frame; plectoneme_length in nm of DNA; tip in nm of "
-                           "contour from the surface (analysis.twist.find_plectonemes)"})
-        notes.append("torsionally constrained DNA: side-particle frames, twist persistence "
-                     f"{scene.twist_persistence_nm} nm, twist-stretch coupling left out")
-        for pt, r in zip(summary["points"], results):
-            pt.update(twist_summary(r))
-    short = [pt["turns"] for pt in summary["points"]
-             if pt["extension_nm"].get("sem_reliable") is False]
-    if short:
-        notes.append(
-            f"sampling at turns {short} spans fewer than {reporters.MIN_N_EFF} correlation times "
-            "of the extension: its SEM is a rough estimate (likely too small); raise `steps`")
-    reporters.write_summary(os.path.join(out, "summary.json"), summary)
-    plots.extension_torque_plot(summary, os.path.join(out, "extension_torque.png"))
-    return summary
+    progress = progress or (lambda n: None)
+    s = model.scene
+    ri = s.report_interval
+    every = max(1, s.frame_interval // ri)
+    ckdir = os.path.join(out, "checkpoints")
+    os.makedirs(ckdir, exist_ok=True)
+    init = os.path.join(ckdir, "initial.chk")
+    if not os.path.exists(init):
+        engine.minimise()
+        engine.save_checkpoint(init)
+    sample_cols = {k: v for ob in observables if ob.every == "sample"
+                   for k, v in ob.columns.items()}
+    frame_cols = {k: v for ob in observables if ob.every == "frame"
+                  for k, v in ob.columns.items()}
+    trap = ctx.get("trap_parameter")
+    dirs = []
+    for seg in schedule:
+        pdir = point_dir(out, seg)
+        dirs.append(pdir)
+        done = os.path.join(pdir, "done.json")
+        if os.path.exists(done):
+            progress(seg.steps)
+            log.info("turns=%g loaded from %s", seg.turns, pdir)
+            continue
+        start = init if seg.start_from is None else os.path.join(
+            point_dir(out, schedule.segments[seg.start_from]), "state.chk")
+        engine.load_checkpoint(start)
+        if os.path.isdir(pdir):
+            shutil.rmtree(pdir)  # an interrupted point: run it again from its start
+        ctx = dict(ctx, trap_turns=seg.start_turns)
+        pos = engine.positions()
+        for ob in observables:
+            ob.reset(seg.start_turns, pos)
+        fail_dir = out
+        with reporters.PointWriter(pdir, model.topology, engine.dt_ns * 1e3, s.frame_interval,
+                                   sample_cols, frame_cols, seg.turns) as w:
+            # 1. ramp the trap angle
+            nramp = seg.ramp_steps // ri
+            for i in range(1, nramp + 1):
+                tt = seg.start_turns + (seg.turns - seg.start_turns) * i / nramp
+                engine.set_parameter(trap, TWO_PI * tt)
+                pos = engine.advance(ri, fail_dir)
+                ctx["trap_turns"] = tt
+                _, msg = _observe(observables, pos, ctx, False)
+                if msg:
+                    engine.blow_up(msg)
+                progress(ri)
+            if trap is not None:
+                engine.set_parameter(trap, TWO_PI * seg.turns)
+            ctx["trap_turns"] = seg.turns
+            # 2. equilibrate
+            left = seg.equilibration_steps
+            while left > 0:
+                n = min(left, ri)
+                pos = engine.advance(n, fail_dir)
+                _, msg = _observe(observables, pos, ctx, False)
+                if msg:
+                    engine.blow_up(msg)
+                progress(n)
+                left -= n
+            # 3. sample
+            for i in range(seg.sample_steps // ri):
+                pos = engine.advance(ri, fail_dir)
+                progress(ri)
+                is_frame = (i + 1) % every == 0
+                values, msg = _observe(observables, pos, ctx, is_frame)
+                if msg:
+                    engine.blow_up(msg)
+                w.sample(engine.step, values)
+                if is_frame:
+                    w.frame(engine.step, pos.astype("float32"), values)
+        engine.save_checkpoint(os.path.join(pdir, "state.chk"))
+        rundir.atomic_write_text(done, json.dumps({"turns": seg.turns, "step": engine.step,
+                                                   "frames": w.n_frames}) + "\n")
+    return dirs

@@ -232,7 +232,7 @@ def initial_side_positions(chain_pos, arm_nm: float, first=(1.0, 0.0, 0.0)) -> n
     -------
     ndarray, shape (n - 1, 3)
     """
-    from ..analysis.twist import parallel_transport
+    from ..geometry.twist import parallel_transport
 
     p = np.asarray(chain_pos, float)
     t = np.diff(p, axis=0)

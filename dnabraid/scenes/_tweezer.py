@@ -1,0 +1,345 @@
+"""What the magnetic-tweezer scenes (braid, tether, plectoneme) share: keys, checks, run.
+
+A tweezer scene builds DNA strands between a surface and a magnetic bead with the chain
+kit (:mod:`dnabraid.chains`), adds its own attachments in :meth:`TweezerScene.attach`,
+names its observables, and runs the turn schedule (:mod:`dnabraid.protocols`) with the
+runner (:mod:`dnabraid.runner`), streaming into the run directory (:mod:`dnabraid.rundir`).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import os
+import time
+from typing import ClassVar
+
+import numpy as np
+
+from .. import forcefield, reporters, rundir
+from ..chains import (
+    MIN_PASSAGE_BARRIER_KT,
+    ChainKit,
+    DNAParameters,
+    Model,
+    max_bead_spacing_nm,
+    passage_barrier_kT,
+)
+from ..engine import MAX_SEED, Engine
+from ..forces.chiral import chiral_force
+from ..protocols import TurnSchedule
+from ..runner import run_schedule
+from .base import Scene, SceneError, key
+
+#: Largest number of DNA beads a tweezer scene may have (memory and time stay sane).
+MAX_BEADS = 20000
+
+UNITS = {"extension": "nm", "torque": "pN nm (torque the trap applies; > 0 holds n > 0)",
+         "catenation": "turns (Gauss linking number, strands closed by vertical rays)",
+         "sem": "standard error of the mean, autocorrelation-corrected (Sokal window)"}
+
+
+def _default_turns():
+    return (-4.0, -3.0, -2.0, -1.0, 0.0, 1.0, 2.0, 3.0, 4.0)
+
+
+_MECH = forcefield.mechanics()
+
+
+@dataclasses.dataclass(frozen=True)
+class TweezerScene(Scene):
+    """Keys every tweezer scene has (all lengths nm, forces pN, energies pN nm)."""
+
+    force_pN: float = key(2.0, "pN", "constant force pulling the magnetic bead up (> 0)")
+    turns: tuple = key((0.0,), "turns", "list of bead turn values n")
+    salt_mM: float = key(150.0, "mM", "monovalent salt; sets the effective DNA diameter "
+                         "(Stigter 1977)")
+    length_nm: float = key(200.0, "nm", "contour length of each DNA molecule")
+    bead_spacing_nm: float = key(5.0, "nm", "distance b between beads along a strand")
+    persistence_nm: float = key(float(_MECH["persistence_nm"]), "nm",
+                                "bending persistence length (forcefields/dna.toml)")
+    temperature_K: float = key(298.15, "K", "temperature")
+    steps: int = key(180000, "steps", "sampling steps per turn value (after equilibration)")
+    equilibration_steps: int = key(40000, "steps", "equilibration steps after each change "
+                                   "of turns")
+    seed: int = key(1, "", f"random seed of the Brownian integrator (0 ... {MAX_SEED})")
+    diameter_nm: float = key(0.0, "nm", "effective DNA diameter; 0 = from salt (Stigter 1977)")
+    stretch_modulus_pN: float = key(float(_MECH["stretch_modulus_pN"]), "pN",
+                                    "stretch modulus S of the double helix (bond stiffness "
+                                    "S/b; forcefields/dna.toml)")
+    stretch: str = key("bonds", "", "'bonds' (harmonic springs) or 'constraints' (rigid bonds)")
+    bead_radius_nm: float = key(500.0, "nm", "radius of the magnetic bead (sets its physical "
+                                "friction)")
+    bead_friction_factor: float = key(0.01, "", "bead friction used / physical Stokes "
+                                      "friction (<1 speeds sampling)")
+    report_interval: int = key(100, "steps", "steps between observable samples")
+    frame_interval: int = key(5000, "steps", "steps between trajectory frames (multiple of "
+                              "report_interval)")
+    surface: bool = key(True, "", "true: a wall at z = 0 keeps DNA above the surface")
+    timestep_safety: float = key(0.3, "", "time step = safety x 2 / (mobility x largest "
+                                 "stiffness)")
+    alpha: float = key(0.0, "pN", "chiral strength alpha of phi = alpha tan(eta/2) (energy per "
+                       "contact length, pN = pN nm/nm; 1 kT/nm = 4.11 pN); 0 = no chiral term; "
+                       "'salt' = the estimate at salt_mM from forcefields/chiral.toml; > 0 "
+                       "favours right-handed braids (n > 0)")
+
+    #: The trap's global parameter (None: the bead is not turned).
+    trap_parameter: ClassVar[str | None] = None
+
+    # -- derived -----------------------------------------------------------------------
+    @property
+    def n_beads(self) -> int:
+        """Beads per strand (both ends included)."""
+        return int(round(self.length_nm / self.bead_spacing_nm)) + 1
+
+    @property
+    def kT(self) -> float:
+        from ..units import kT
+
+        return kT(self.temperature_K)
+
+    @property
+    def effective_diameter_nm(self) -> float:
+        if self.diameter_nm > 0:
+            return float(self.diameter_nm)
+        return forcefield.salt_parameters(self.salt_mM).diameter_nm
+
+    def dna(self) -> DNAParameters:
+        return DNAParameters.make(temperature_K=self.temperature_K,
+                                  bead_spacing_nm=self.bead_spacing_nm,
+                                  persistence_nm=self.persistence_nm,
+                                  stretch_modulus_pN=self.stretch_modulus_pN,
+                                  salt_mM=self.salt_mM, diameter_nm=self.diameter_nm)
+
+    # -- keys ----------------------------------------------------------------------------
+    @classmethod
+    def resolve(cls, values: dict) -> dict:
+        if isinstance(values.get("alpha"), str):
+            if values["alpha"].strip().lower() != "salt":
+                raise SceneError(f"alpha (in pN): expected a number or 'salt', got "
+                                 f"{values['alpha']!r}")
+            salt = values.get("salt_mM", cls.salt_mM)
+            if isinstance(salt, bool) or not isinstance(salt, (int, float)) or not salt > 0:
+                raise SceneError(f"salt_mM={salt!r} mM: salt must be > 0 mM")
+            values["alpha"] = forcefield.chiral_parameters(float(salt))["alpha_pN"]
+        return values
+
+    #: True when the strands must not pass through each other whatever their length.
+    needs_passage_barrier: ClassVar[bool] = False
+
+    def validate(self) -> None:
+        need = self.need
+        need(self.force_pN > 0, "force_pN", "the pulling force must be > 0 pN")
+        need(self.force_pN <= 100, "force_pN",
+             "above ~65 pN DNA overstretches; this model allows <= 100 pN")
+        need(self.salt_mM > 0, "salt_mM", "salt must be > 0 mM")
+        need(self.salt_mM <= 5000, "salt_mM", "salt must be <= 5000 mM")
+        need(self.length_nm > 0, "length_nm", "must be > 0")
+        need(self.bead_spacing_nm > 0, "bead_spacing_nm", "must be > 0")
+        need(self.n_beads >= 3, "length_nm", f"gives only {self.n_beads} beads; need >= 3 "
+             "(length >= 2 x bead_spacing_nm)")
+        need(self.n_beads <= MAX_BEADS, "length_nm",
+             f"gives {self.n_beads} beads per strand (> {MAX_BEADS}): too large to simulate; "
+             "shorten the DNA or coarsen bead_spacing_nm")
+        need(abs(self.n_beads - 1 - self.length_nm / self.bead_spacing_nm) < 1e-6, "length_nm",
+             f"must be a whole multiple of bead_spacing_nm={self.bead_spacing_nm}")
+        need(self.persistence_nm > 0, "persistence_nm", "must be > 0")
+        need(self.persistence_nm >= self.bead_spacing_nm, "persistence_nm",
+             "must be >= bead_spacing_nm (a bead chain cannot resolve a shorter persistence)")
+        need(150 <= self.temperature_K <= 400, "temperature_K", "must be between 150 and 400 K")
+        need(self.report_interval >= 1, "report_interval", "must be >= 1")
+        need(self.steps >= self.report_interval, "steps",
+             f"must be >= report_interval={self.report_interval}")
+        need(self.equilibration_steps >= 0, "equilibration_steps", "must be >= 0")
+        need(self.frame_interval >= self.report_interval
+             and self.frame_interval % self.report_interval == 0, "frame_interval",
+             f"must be a multiple of report_interval={self.report_interval}")
+        need(self.diameter_nm >= 0, "diameter_nm", "must be >= 0 (0 = from salt)")
+        need(self.stretch_modulus_pN > 10 * self.force_pN, "stretch_modulus_pN",
+             "must be much larger than the force (> 10 x force_pN)")
+        need(self.stretch in ("bonds", "constraints"), "stretch",
+             "allowed: 'bonds', 'constraints'")
+        need(self.bead_radius_nm > 0, "bead_radius_nm", "must be > 0")
+        need(0 < self.bead_friction_factor <= 1, "bead_friction_factor", "must be in (0, 1]")
+        need(0 < self.timestep_safety <= 0.9, "timestep_safety", "must be in (0, 0.9]")
+        need(0 <= self.seed <= MAX_SEED, "seed", f"must be in [0, {MAX_SEED}]")
+        need(abs(self.alpha) <= 50.0, "alpha",
+             "|alpha| must be <= 50 pN (~12 kT/nm; literature estimates are 0.01-1.5 pN, "
+             "forcefields/chiral.toml)")
+        if self.needs_passage_barrier or self.length_nm > 3 * self.persistence_nm:
+            self.check_passage_barrier()
+
+    def check_passage_barrier(self) -> None:
+        """Strands must not pass through each other (the barrier includes bond stretch)."""
+        d = self.effective_diameter_nm
+        k_kT = None
+        if self.stretch == "bonds":
+            k_kT = self.stretch_modulus_pN / self.bead_spacing_nm / self.kT
+        barrier = passage_barrier_kT(self.bead_spacing_nm, d, k_kT)
+        s_kT = None if k_kT is None else self.stretch_modulus_pN / self.kT
+        self.need(barrier >= MIN_PASSAGE_BARRIER_KT, "bead_spacing_nm",
+                  f"too coarse for the effective DNA diameter {d:.2f} nm at {self.salt_mM} mM "
+                  f"salt: strands could pass through each other (barrier {barrier:.1f} kT < "
+                  f"{MIN_PASSAGE_BARRIER_KT} kT, bond stretch included). Use bead_spacing_nm "
+                  f"<= {max_bead_spacing_nm(d, s_kT):.2f}")
+
+    # -- build ---------------------------------------------------------------------------
+    def build(self) -> Model:
+        """The OpenMM model: DNA from the chain kit, then this scene's attachments."""
+        kit = ChainKit(self.dna())
+        params = self.attach(kit)
+        if self.alpha != 0.0:
+            # Kornyshev chiral term between facing segments (docs/chirality.md); left out at
+            # alpha = 0. Its curvature per unit alpha is at most ~0.1 A / lambda_D^2 per nm
+            # of partner (A ~ 1/(2 Delta)), summed over ~2 Delta of partner and both ends.
+            d = kit.dna
+            kit.add_force(chiral_force(kit.chains, self.alpha, delta_nm=d.diameter_nm,
+                                       debye_nm=d.debye_nm, bead_spacing_nm=d.bead_spacing_nm,
+                                       name="chiral"), "chiral",
+                          rate=abs(self.alpha) * 0.1 / d.debye_nm**2 * 4.0 / d.zeta_bead)
+        params["alpha_pN"] = self.alpha
+        return kit.finish(self, safety=self.timestep_safety, params=params)
+
+    def attach(self, kit: ChainKit) -> dict:  # pragma: no cover - abstract
+        """Add strands and attachments to ``kit`` (setting ``kit.attachments`` and, where
+        they exist, ``kit.sides``, ``kit.bead_orientation``, ``kit.extra``); return the
+        numbers to record in the model's params."""
+        raise NotImplementedError
+
+    def observables(self, model: Model) -> list:  # pragma: no cover - abstract
+        raise NotImplementedError
+
+    def schedule(self) -> TurnSchedule:
+        return TurnSchedule(self.turns, turn_rate=getattr(self, "turn_rate", None)
+                            if self.trap_parameter else None,
+                            equilibration_steps=self.equilibration_steps,
+                            sample_steps=self.steps, report_interval=self.report_interval)
+
+    # -- run -----------------------------------------------------------------------------
+    def notes(self, model: Model) -> list[str]:
+        return []
+
+    def units(self) -> dict:
+        return dict(UNITS)
+
+    def point_summary(self, samples: dict, frames: dict) -> dict:
+        """Per turn value: mean and SEM of each observable (from the streamed files)."""
+        ms = reporters.mean_sem_entry
+        nan = np.array([np.nan])
+        return {
+            "turns": float(samples["turns"][0]) if len(samples["turns"]) else None,
+            "extension_nm": ms(samples["extension_nm"]),
+            "torque_pN_nm": ms(samples.get("torque_pN_nm", nan)),
+            "catenation": ms(frames.get("catenation", nan)),
+            "bead_angle_turns": ms(samples.get("bead_angle_turns", nan)),
+            "n_samples": int(len(samples["step"])),
+            "n_frames": int(len(frames["step"])),
+        }
+
+    def run(self, out: str, *, platform: str = "CPU", threads: int | None = None,
+            progress_factory=None) -> dict:
+        t0 = time.perf_counter()
+        model = self.build()
+        engine = Engine(model, platform=platform, seed=self.seed, threads=threads)
+        resumed = rundir.prepare_out_dir(self, out)
+        sched = self.schedule()
+        total = sched.total_steps
+        bar = progress_factory(total) if progress_factory else None
+        obs = self.observables(model)
+        ctx = {"trap_parameter": self.trap_parameter,
+               "trap_stiffness": getattr(self, "trap_stiffness_pN_nm", None),
+               "turn_rate": getattr(self, "turn_rate", None)}
+        try:
+            dirs = run_schedule(model, engine, sched, obs, out, ctx=ctx,
+                                progress=bar.update if bar else None)
+        finally:
+            if bar:
+                bar.close()
+        wall = time.perf_counter() - t0
+        p = model.params
+        dt_ns = model.timestep.time_step_ns
+        rundir.write_topology(os.path.join(out, "topology.pdb"), model.topology, model.positions)
+        sample_cols = {k: v for ob in obs if ob.every == "sample" for k, v in ob.columns.items()}
+        frame_cols = {k: v for ob in obs if ob.every == "frame" for k, v in ob.columns.items()}
+        reporters.combine(out, dirs, model.topology, dt_ns * 1e3, self.frame_interval,
+                          sample_cols, frame_cols)
+        points = [self.point_summary(*reporters.read_point(d)) for d in dirs]
+        points.sort(key=lambda pt: pt["turns"])
+        notes = self.notes(model)
+        if resumed:
+            notes.append("resumed from checkpoints; wall_time_s counts this invocation only")
+        short = [pt["turns"] for pt in points if pt["extension_nm"].get("sem_reliable") is False]
+        if short:
+            notes.append(
+                f"sampling at turns {short} spans fewer than {reporters.MIN_N_EFF} correlation "
+                "times of the extension: its SEM is a rough estimate (likely too small); raise "
+                "`steps`")
+        n_part = model.system.getNumParticles()
+        summary = rundir.Summary(
+            scene=self.to_dict(), wall_time_s=wall, platform=engine.platform,
+            time_step_ps=dt_ns * 1e3, time_step_reason=model.timestep.reason,
+            relaxation_rates_per_ns=model.timestep.rates_per_ns, total_steps=total,
+            steps_per_second=total / wall if not resumed else None,
+            ns_per_bead_per_step=(wall / total / n_part * 1e9) if not resumed else None,
+            n_particles=n_part, forces=sorted(model.forces),
+            effective_diameter_nm=p["diameter_nm"], bending_kappa_kT=p["kappa_kT"],
+            units=self.units(), notes=notes, versions=rundir.versions(), points=points,
+            seed=self.seed, integrator_seed=engine.seed)
+        rundir.write_summary(os.path.join(out, "summary.json"), summary)
+        from .. import plots
+
+        plots.extension_torque_plot(summary.to_dict(), os.path.join(out, "extension_torque.png"))
+        return summary.to_dict()
+
+    # -- CLI and sweeps ------------------------------------------------------------------
+    def report(self, summary: dict, out: str, file) -> None:
+        print(f"time step {summary['time_step_ps']:.4g} ps: {summary['time_step_reason']}",
+              file=file)
+        for n in summary["notes"]:
+            print(f"note: {n}", file=file)
+        print(f"{'turns':>7} {'extension_nm':>20} {'torque_pN_nm':>20} {'catenation':>18}",
+              file=file)
+
+        def fmt(d, p=2):
+            if d["mean"] is None:
+                return "-"
+            return f"{d['mean']:.{p}f} +- {d['sem']:.{p}f}"
+
+        for pt in summary["points"]:
+            print(f"{pt['turns']:>7g} {fmt(pt['extension_nm'], 1):>20} "
+                  f"{fmt(pt['torque_pN_nm'], 1):>20} {fmt(pt['catenation'], 3):>18}", file=file)
+        print(f"wall time {summary['wall_time_s']:.1f} s on {summary['platform']}; results in "
+              f"{out}/", file=file)
+
+    row_columns: ClassVar[tuple] = ("turns", "extension_nm", "extension_sem_nm", "torque_pN_nm",
+                                    "torque_sem_pN_nm", "catenation", "catenation_sem",
+                                    "n_samples")
+
+    def rows(self, summary: dict) -> list[dict]:
+        out = []
+        for pt in summary["points"]:
+            out.append({"turns": pt["turns"],
+                        "extension_nm": pt["extension_nm"]["mean"],
+                        "extension_sem_nm": pt["extension_nm"]["sem"],
+                        "torque_pN_nm": pt["torque_pN_nm"]["mean"],
+                        "torque_sem_pN_nm": pt["torque_pN_nm"]["sem"],
+                        "catenation": pt["catenation"]["mean"],
+                        "catenation_sem": pt["catenation"]["sem"],
+                        "n_samples": pt["n_samples"]})
+        return out
+
+    def bead_notes(self, zeta_bead: float, zeta_phys: float) -> list[str]:
+        if zeta_bead < zeta_phys:
+            return [f"bead friction reduced for sampling: {zeta_bead:.3g} pN ns/nm instead of "
+                    f"the physical Stokes friction {zeta_phys:.3g} pN ns/nm of a "
+                    f"{self.bead_radius_nm} nm bead (bead_friction_factor = "
+                    f"{self.bead_friction_factor}); equilibrium averages are unaffected, times "
+                    "are not physical"]
+        return []
+
+
+def lockup_turns(length_nm: float, diameter_nm: float) -> float:
+    """Most turns a braid of two strands of length L and diameter d can hold: the two-ply
+    locks up at theta = 45 deg (van der Heijden's talk on elastic braids, lock-up of the
+    two-ply), n = L sin(theta) / (2 pi r) = L / (sqrt(2) pi d)."""
+    return length_nm / (math.sqrt(2.0) * math.pi * diameter_nm)

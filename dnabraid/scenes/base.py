@@ -1,0 +1,181 @@
+"""What a scene declares: its keys (unit, default, help), validation, build and run.
+
+A scene is a frozen dataclass whose fields are its keys, each declared with :func:`key`
+(default, unit, help). Subclasses add keys or redeclare a key to change its default. A
+scene validates itself when made (:meth:`Scene.from_values`), round-trips through TOML
+(:meth:`Scene.to_toml`) and knows how to run itself into a run directory
+(:meth:`Scene.run`), print its result (:meth:`Scene.report`) and give sweep rows
+(:meth:`Scene.rows`). Nothing outside :mod:`dnabraid.scenes` asks a scene's name.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from typing import Any, ClassVar
+
+from .. import tomlio
+
+__all__ = ["KeyInfo", "Scene", "SceneError", "key"]
+
+
+class SceneError(ValueError):
+    """A scene could not be built: unknown key, bad value or impossible geometry."""
+
+
+@dataclasses.dataclass(frozen=True)
+class KeyInfo:
+    """A scene key as the CLI, sweeps and docs see it."""
+
+    name: str
+    kind: str        # "float", "int", "bool", "str", "floats" (a list of numbers)
+    unit: str
+    default: Any
+    help: str
+
+
+def _kind_of(default) -> str:
+    if isinstance(default, bool):
+        return "bool"
+    if isinstance(default, int):
+        return "int"
+    if isinstance(default, float):
+        return "float"
+    if isinstance(default, str):
+        return "str"
+    if isinstance(default, tuple):
+        return "floats"
+    raise TypeError(f"unsupported key default {default!r}")
+
+
+def key(default, unit: str = "", help: str = "", *, kind: str | None = None):
+    """Declare a scene key (a dataclass field with its unit and help)."""
+    meta = {"unit": unit, "help": help, "kind": kind or _kind_of(default)}
+    return dataclasses.field(default=default, metadata=meta)
+
+
+def _coerce(info: KeyInfo, value: Any):
+    where = info.name + (f" (in {info.unit})" if info.unit else "")
+    k = info.kind
+    if k == "floats":
+        if isinstance(value, (int, float)) and not isinstance(value, bool):
+            value = [value]
+        if not isinstance(value, (list, tuple)) or not value:
+            raise SceneError(f"{where}: expected a non-empty list of numbers, got {value!r}")
+        if any(isinstance(x, bool) or not isinstance(x, (int, float)) for x in value):
+            raise SceneError(f"{where}: expected a list of numbers, got {value!r}")
+        out = tuple(float(x) for x in value)
+        if any(not math.isfinite(x) for x in out):
+            raise SceneError(f"{where}: values must be finite, got {value!r}")
+        if len(set(out)) != len(out):
+            raise SceneError(f"{where}: values must be distinct, got {value!r}")
+        return out
+    if k == "bool":
+        if isinstance(value, bool):
+            return value
+        raise SceneError(f"{where}: expected true or false, got {value!r}")
+    if k == "int":
+        if (isinstance(value, bool) or not isinstance(value, (int, float))
+                or not math.isfinite(value) or int(value) != value):
+            raise SceneError(f"{where}: expected an integer, got {value!r}")
+        return int(value)
+    if k == "float":
+        if isinstance(value, bool) or not isinstance(value, (int, float)):
+            raise SceneError(f"{where}: expected a number, got {value!r}")
+        if not math.isfinite(value):
+            raise SceneError(f"{where}: expected a finite number, got {value!r}")
+        return float(value)
+    if k == "str":
+        if not isinstance(value, str):
+            raise SceneError(f"{where}: expected a string, got {value!r}")
+        return value
+    raise SceneError(f"{info.name}: unsupported kind {k!r}")  # pragma: no cover
+
+
+@dataclasses.dataclass(frozen=True)
+class Scene:
+    """Base of every scene. Subclasses set ``name`` and ``help`` and declare keys."""
+
+    name: ClassVar[str] = ""
+    help: ClassVar[str] = ""
+
+    # -- keys ------------------------------------------------------------------------
+    @classmethod
+    def keys(cls) -> dict[str, KeyInfo]:
+        """The scene's keys in declaration order."""
+        out = {}
+        for f in dataclasses.fields(cls):
+            m = f.metadata
+            out[f.name] = KeyInfo(f.name, m["kind"], m["unit"], f.default, m["help"])
+        return out
+
+    @property
+    def scene(self) -> str:
+        """The scene's registered name (``scene = ...`` in its TOML)."""
+        return self.name
+
+    @classmethod
+    def resolve(cls, values: dict) -> dict:
+        """Hook: turn symbolic values into numbers before coercion (default: unchanged)."""
+        return values
+
+    @classmethod
+    def from_values(cls, values: dict) -> Scene:
+        """Coerce, construct and validate; raise :class:`SceneError` naming the key."""
+        infos = cls.keys()
+        unknown = sorted(set(values) - set(infos))
+        if unknown:
+            raise SceneError(f"unknown key(s) {', '.join(unknown)} for scene {cls.name!r}; "
+                             f"allowed keys: {', '.join(sorted(infos))}")
+        values = cls.resolve(dict(values))
+        coerced = {k: _coerce(infos[k], v) for k, v in values.items()}
+        s = cls(**coerced)
+        s.validate()
+        return s
+
+    def need(self, cond: bool, key: str, msg: str) -> None:
+        """Raise :class:`SceneError` for ``key`` with ``msg`` unless ``cond``."""
+        if not cond:
+            unit = self.keys()[key].unit
+            raise SceneError(f"{key}={getattr(self, key)!r}{' ' + unit if unit else ''}: {msg}")
+
+    def validate(self) -> None:
+        """Check values and geometry (subclasses extend)."""
+
+    # -- TOML ------------------------------------------------------------------------
+    def to_dict(self) -> dict:
+        d = {"scene": self.name}
+        for f in dataclasses.fields(self):
+            v = getattr(self, f.name)
+            d[f.name] = list(v) if isinstance(v, tuple) else v
+        return d
+
+    def to_toml(self) -> str:
+        return tomlio.dumps(self.to_dict())
+
+    # -- running ---------------------------------------------------------------------
+    def build(self):
+        """The OpenMM model of a thermal scene (scenes without one raise SceneError)."""
+        raise SceneError(f"scene {self.name!r} has no Brownian OpenMM model to build; run it "
+                         "with `dnabraid run` (Scene.run)")
+
+    def run(self, out: str, *, platform: str = "CPU", threads: int | None = None,
+            progress_factory=None) -> dict:
+        """Run the scene into the run directory ``out``; return the summary dict."""
+        raise NotImplementedError
+
+    def report(self, summary: dict, out: str, file) -> None:
+        """Print the run's result table for a person (the CLI calls this)."""
+        raise NotImplementedError
+
+    def rows(self, summary: dict) -> list[dict]:
+        """Sweep rows of one finished run: one dict per result line (column -> value)."""
+        raise NotImplementedError
+
+    #: Columns :meth:`rows` fills (after the sweep's grid keys).
+    row_columns: ClassVar[tuple] = ()
+
+    #: Keys a sweep/extremes case may drop for this scene (e.g. a tether has no turns).
+    def default_short_run(self) -> dict:
+        """Overrides that make a short run of this scene (extremes matrix, smoke tests)."""
+        return {}

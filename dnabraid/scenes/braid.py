@@ -1,0 +1,120 @@
+"""Scene ``braid``: two nicked DNA molecules between a surface and a magnetic bead, braided
+by turning the bead; extension, torque and catenation against turns.
+
+Particle layout: each strand is a chain from its surface tether (immobile) to its bead
+attachment point; the two attachment points and the bead centre C form a rigid triangle
+(links of stiffness S/b), C lying at the bead radius R from both attachments, above them.
+C carries the bead's friction and the magnetic force; the sphere of radius R around C
+excludes DNA, so strands cannot slip over the bead and unbraid. The rotational trap
+U = -K cos(phi - 2 pi n) holds the attachment chord's angle phi. No twist (nicked DNA).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from typing import ClassVar
+
+import numpy as np
+
+from .. import observables as ob
+from .. import units
+from ..forces import bead_exclusion_force, pull_force, stretch_force, trap_force
+from ._tweezer import TweezerScene, _default_turns, lockup_turns
+from .base import key
+
+
+@dataclasses.dataclass(frozen=True)
+class Braid(TweezerScene):
+    name: ClassVar[str] = "braid"
+    help: ClassVar[str] = ("two nicked DNA molecules between a surface and a magnetic bead, "
+                           "braided by turning the bead: extension, torque and catenation "
+                           "against turns")
+    trap_parameter: ClassVar[str] = "trap_angle"
+    needs_passage_barrier: ClassVar[bool] = True
+
+    turns: tuple = key(_default_turns(), "turns", "list of bead turn values n (catenation "
+                       "imposed by the rotational trap)")
+    tether_separation_nm: float = key(40.0, "nm", "distance between the two tether points "
+                                      "(surface and bead)")
+    trap_stiffness_pN_nm: float = key(20000.0, "pN nm", "rotational trap: U = -K cos(phi - "
+                                      "2 pi n)")
+    turn_rate: float = key(5e-5, "turns/step", "speed at which the trap angle is ramped "
+                           "between turn values")
+
+    def validate(self) -> None:
+        super().validate()
+        need = self.need
+        need(self.trap_stiffness_pN_nm > 0, "trap_stiffness_pN_nm", "must be > 0")
+        need(0 < self.turn_rate <= 0.01, "turn_rate", "must be in (0, 0.01] turns per step")
+        d = self.effective_diameter_nm
+        need(self.tether_separation_nm >= d, "tether_separation_nm",
+             f"must be >= the effective diameter {d:.2f} nm (the tethers would overlap)")
+        need(self.tether_separation_nm < self.length_nm, "tether_separation_nm",
+             f"must be < length_nm={self.length_nm} (tethers farther apart than the strands "
+             "are long cannot be bridged)")
+        need(self.tether_separation_nm < 2 * self.bead_radius_nm, "tether_separation_nm",
+             f"must be < the bead diameter 2 x {self.bead_radius_nm} nm")
+        n_lock = lockup_turns(self.length_nm, d)
+        need(max(abs(t) for t in self.turns) <= n_lock, "turns",
+             f"|turns| must be <= {n_lock:.2f}: more turns than a {self.length_nm} nm braid "
+             f"of diameter {d:.2f} nm can hold at the 45-degree lock-up (L / (sqrt(2) pi d); "
+             "van der Heijden, elastic braids: the two-ply locks up at 45 degrees)")
+
+    def attach(self, kit) -> dict:
+        d = kit.dna
+        b, n = self.bead_spacing_nm, self.n_beads
+        half = 0.5 * self.tether_separation_nm
+        chains = []
+        for s, x in enumerate((-half, half)):
+            pos = np.c_[np.full(n, x), np.zeros(n), b * np.arange(n)]
+            chains.append(kit.add_chain(pos, "AB"[s]))
+        att = [int(c[-1]) for c in chains]
+        fixed = [int(c[0]) for c in chains]
+        mu = 1.0 / d.zeta_bead
+        kit.add_stretch(self.stretch)
+        kit.add_bend()
+        n_excl = kit.add_excluded_volume([tuple(att), tuple(fixed)])
+        if self.surface:
+            kit.add_wall()
+        zeta_phys = units.stokes_friction(self.bead_radius_nm)
+        zeta_center = self.bead_friction_factor * zeta_phys
+        R = self.bead_radius_nm
+        h = math.sqrt(R * R - half * half)
+        top = kit.positions[att].mean(axis=0)
+        center = kit.add_particle("M", "BEA", "MB", zeta_center, top + np.array([0.0, 0, h]))
+        K = self.trap_stiffness_pN_nm
+        kit.add_force(pull_force([center], [1.0], self.force_pN, name="pull"), "pull")
+        kit.add_force(trap_force(att[0], att[1], K, 0.0, K / half**2, name="trap"), "trap",
+                      rate=2 * K / half**2 * mu)
+        kit.add_force(stretch_force([att, (att[0], center), (att[1], center)], d.k_bond,
+                                    [self.tether_separation_nm, R, R], name="link"), "link",
+                      rate=3 * d.k_bond * mu)
+        near = {int(c[-1]) for c in chains} | {int(c[-2]) for c in chains}
+        dna = [int(i) for c in chains for i in c[1:] if int(i) not in near]
+        kit.add_force(bead_exclusion_force(center, dna, R + 0.5 * d.diameter_nm, d.wall_k,
+                                           name="beadwall"), "beadwall")
+        kit.bound("stretch", "bend", "wca", "chiral")
+        kit.bound("wall", "stretch")
+        kit.bound("trap", "link")
+        kit.attachments = att
+        kit.extra = {"bead_center": center}
+        return {"bead_center": center, "zeta_center_pN_ns_per_nm": zeta_center,
+                "zeta_attach_pN_ns_per_nm": d.zeta_bead,
+                "zeta_bead_physical_pN_ns_per_nm": zeta_phys,
+                "wall_k_pN_per_nm": d.wall_k if self.surface else 0.0,
+                "n_exclusions": n_excl}
+
+    def observables(self, model) -> list:
+        att = model.attachments
+        return [ob.Extension(att), ob.BeadAngle((att[0], att[1])),
+                ob.TrapTorque(self.trap_stiffness_pN_nm), ob.Catenation(model.chains)]
+
+    def notes(self, model) -> list[str]:
+        p = model.params
+        return self.bead_notes(p["zeta_center_pN_ns_per_nm"],
+                               p["zeta_bead_physical_pN_ns_per_nm"])
+
+    def default_short_run(self) -> dict:
+        return {"steps": 2000, "equilibration_steps": 500, "turns": [0.0, 1.0],
+                "turn_rate": 1e-3, "frame_interval": 500}

@@ -1,0 +1,199 @@
+"""Scene ``plectoneme``: one torsionally constrained (un-nicked) DNA molecule between surface
+and bead under force, turned n times: extension and torque against turns (the hat curve),
+buckling, twist, writhe and plectonemes.
+
+After the DNA beads come one side particle per bond (chain ``F``; the bond's material
+frame, :mod:`dnabraid.forces.twist`) and the bead's orientation particle m (chain ``M``),
+held horizontal at ``BEAD_ARM_NM`` from the attachment and turned by the rotational trap;
+the twist energy couples the surface frame (+z, +x), the bond frames and the bead frame
+(+z, m - r_att), so turning the bead changes the linking number. Side particles and m carry
+no excluded volume.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from typing import ClassVar
+
+import numpy as np
+
+from .. import forcefield, reporters
+from .. import observables as ob
+from .. import units
+from ..forces import pull_force, stretch_force, trap_force
+from ..forces.twist import (
+    bead_plane_force,
+    frame_springs,
+    initial_side_positions,
+    twist_anchor_force,
+    twist_bead_force,
+    twist_force,
+)
+from ..geometry import random_tether
+from ..geometry.twist import writhe_open
+from ._tweezer import TweezerScene
+from .base import key
+
+#: Frame arm a (side particle distance from the axis) in units of the bead spacing.
+FRAME_ARM_FRACTION = 1.0
+#: Side-particle friction / DNA bead friction. The frame angle's friction sets only how fast
+#: twist relaxes (equilibrium does not depend on it); a light side particle relaxes twist
+#: quickly without dragging the beads, and its rates stay below the bonds'.
+FRAME_FRICTION_FRACTION = 0.1
+#: Frame spring constant / bond spring constant. The springs only keep u_i well defined
+#: (thermal wobble sqrt(kT/k) ~ 0.6 nm against the 5 nm arm); soft keeps the time step.
+FRAME_K_FRACTION = 0.05
+#: Distance of the bead's orientation particle m from the attachment (nm): the trap's
+#: tangential stiffness K / arm^2 and its rate stay moderate.
+BEAD_ARM_NM = 20.0
+
+
+@dataclasses.dataclass(frozen=True)
+class Plectoneme(TweezerScene):
+    name: ClassVar[str] = "plectoneme"
+    help: ClassVar[str] = ("one torsionally constrained DNA molecule between surface and bead "
+                           "under force, turned n times: extension and torque against turns "
+                           "(the hat curve), buckling, twist, writhe and plectonemes")
+    trap_parameter: ClassVar[str] = "trap_angle"
+    needs_passage_barrier: ClassVar[bool] = True
+
+    force_pN: float = key(1.0, "pN", "constant force pulling the magnetic bead up (> 0)")
+    length_nm: float = key(300.0, "nm", "contour length of the DNA molecule")
+    turns: tuple = key((0.0, 1.0, 2.0, 3.0, 4.0, 5.0, 6.0), "turns",
+                       "list of bead turn values n (linking number imposed by the trap)")
+    trap_stiffness_pN_nm: float = key(20000.0, "pN nm", "rotational trap: U = -K cos(phi - "
+                                      "2 pi n)")
+    turn_rate: float = key(5e-5, "turns/step", "speed at which the trap angle is ramped "
+                           "between turn values")
+    twist_persistence_nm: float = key(
+        float(forcefield.mechanics()["twist_persistence_nm"]), "nm",
+        "twist persistence length C of torsionally constrained DNA (Moroz & Nelson 1997, "
+        "Bryant et al. 2003: C ~ 100 nm; twist-stretch coupling is left out)")
+
+    def validate(self) -> None:
+        super().validate()
+        need = self.need
+        need(self.trap_stiffness_pN_nm > 0, "trap_stiffness_pN_nm", "must be > 0")
+        need(0 < self.turn_rate <= 0.01, "turn_rate", "must be in (0, 0.01] turns per step")
+        need(self.twist_persistence_nm >= self.bead_spacing_nm, "twist_persistence_nm",
+             "must be >= bead_spacing_nm (a bead chain cannot resolve a shorter twist "
+             "persistence)")
+        need(self.twist_persistence_nm <= 1000.0, "twist_persistence_nm",
+             "must be <= 1000 nm (DNA: ~100 nm)")
+
+    def attach(self, kit) -> dict:
+        d = kit.dna
+        kT, b, n = d.kT, self.bead_spacing_nm, self.n_beads
+        zeta_phys = units.stokes_friction(self.bead_radius_nm)
+        zeta_attach = max(d.zeta_bead, self.bead_friction_factor * zeta_phys)
+        pos = random_tether(n, b, d.kappa_kT, self.seed,
+                            z_min=0.5 * d.diameter_nm if self.surface else None)
+        # Lk = 0 at the start: the bead clamp takes up -Wr of the random start, which must
+        # stay on the principal branch of the clamp angle (|2 pi Wr| < pi/2)
+        if abs(writhe_open(pos)) > 0.25:
+            pos = np.c_[np.zeros(n), np.zeros(n), b * np.arange(n)]
+        c0 = kit.add_chain(pos, "A", last_friction=zeta_attach)
+        zeta_frame = FRAME_FRICTION_FRACTION * d.zeta_bead
+        arm = FRAME_ARM_FRACTION * b
+        g = self.twist_persistence_nm * kT / b
+        k_frame = FRAME_K_FRACTION * d.k_bond
+        side_pos = initial_side_positions(pos, arm)
+        chain = kit.topology.addChain(id="F")
+        sides = np.array([kit._add(chain, "FRM", "F", zeta_frame, side_pos[i])
+                          for i in range(n - 1)], int)
+        att = int(c0[-1])
+        m = kit.add_particle("M", "BEO", "MO", d.zeta_bead, pos[-1] + np.array([BEAD_ARM_NM,
+                                                                                  0.0, 0.0]))
+        kit.add_stretch(self.stretch)
+        kit.add_bend()
+        n_excl = kit.add_excluded_volume(dna_only=True)
+        if self.surface:
+            kit.add_wall()
+        mu = 1.0 / d.zeta_bead
+        kit.add_force(pull_force([att], [1.0], self.force_pN, name="pull"), "pull")
+        kit.add_force(frame_springs(c0, sides, arm, b, k_frame, name="frame"), "frame",
+                      rate=4.0 * k_frame / zeta_frame)
+        joints = [(c0[i], c0[i + 1], c0[i + 2], sides[i], sides[i + 1]) for i in range(n - 2)]
+        # interior joints stand for a bond length b, the two clamps for b/2 each: the
+        # chain's twist compliance is L / (C kT) (forces/twist.py)
+        kit.add_force(twist_force(joints, g, name="twist"), "twist",
+                      rate=6.0 * g / (arm * arm * zeta_frame))
+        kit.add_force(twist_anchor_force([(c0[0], c0[1], sides[0])], (0, 0, 1), (1, 0, 0),
+                                         2 * g, name="twist_anchor"), "twist_anchor",
+                      group="twist")
+        kit.add_force(twist_bead_force([(c0[-2], c0[-1], sides[-1], m)], 2 * g,
+                                       name="twist_bead"), "twist_bead", group="twist")
+        K = self.trap_stiffness_pN_nm
+        kit.add_force(trap_force(att, m, K, 0.0, K / BEAD_ARM_NM**2, name="trap"), "trap",
+                      rate=2 * K / BEAD_ARM_NM**2 / d.zeta_bead)
+        kit.add_force(stretch_force([(att, m)], d.k_bond, BEAD_ARM_NM, name="link"), "link",
+                      rate=2 * d.k_bond / d.zeta_bead)
+        kit.add_force(bead_plane_force(att, c0[1:-1], d.wall_k, name="beadwall"), "beadwall")
+        # on the DNA beads: the frame springs' reaction 4 k_f and the twist through the
+        # tangents, bounded by 12 g / b^2 (three joints touch a bead)
+        dna_extra = (4.0 * k_frame + 12.0 * g / b**2) * mu
+        kit.bound("stretch", "bend", "wca", "chiral", dna_extra)
+        kit.bound("wall", "stretch", dna_extra)
+        kit.bound("frame", "twist")
+        kit.bound("trap", "link")
+        kit.attachments = [att]
+        kit.sides = sides
+        kit.bead_orientation = m
+        return {"zeta_attach_pN_ns_per_nm": zeta_attach,
+                "zeta_center_pN_ns_per_nm": zeta_attach,
+                "zeta_bead_physical_pN_ns_per_nm": zeta_phys,
+                "wall_k_pN_per_nm": d.wall_k if self.surface else 0.0,
+                "n_exclusions": n_excl,
+                "twist_g_pN_nm": g, "twist_persistence_nm": self.twist_persistence_nm,
+                "frame_arm_nm": arm, "frame_k_pN_per_nm": k_frame,
+                "zeta_frame_pN_ns_per_nm": zeta_frame, "bead_arm_nm": BEAD_ARM_NM,
+                "zeta_bead_orientation_pN_ns_per_nm": d.zeta_bead}
+
+    def observables(self, model) -> list:
+        c = model.chains[0]
+        m = model.bead_orientation
+        return [ob.Extension(model.attachments), ob.BeadAngle((model.attachments[0], m)),
+                ob.TrapTorque(self.trap_stiffness_pN_nm),
+                ob.TwistTorque(c, model.sides, m, self.twist_persistence_nm, model.dna.kT,
+                               self.length_nm),
+                ob.TwistWrithe(c, model.sides, m), ob.Plectonemes(c)]
+
+    def notes(self, model) -> list[str]:
+        p = model.params
+        return self.bead_notes(p["zeta_attach_pN_ns_per_nm"],
+                               p["zeta_bead_physical_pN_ns_per_nm"]) + [
+            "torsionally constrained DNA: side-particle frames, twist persistence "
+            f"{self.twist_persistence_nm} nm, twist-stretch coupling left out"]
+
+    def units(self) -> dict:
+        u = super().units()
+        u.update({
+            "twist_torque": "pN nm, 2 pi Tw C kT / L (exact in the mean; less noisy than the "
+                            "trap torque)",
+            "twist": "turns (Tw, clamps included)",
+            "writhe": "turns (Wr, Gauss integral, chain closed by vertical rays)",
+            "linking": "turns (Tw + Wr; equals the bead angle while the DNA does not pass "
+                       "through itself)",
+            "plectonemes": "number per frame; plectoneme_length in nm of DNA; tip in nm of "
+                           "contour from the surface (geometry.twist.find_plectonemes)"})
+        return u
+
+    def point_summary(self, samples, frames) -> dict:
+        pt = super().point_summary(samples, frames)
+        ms = reporters.mean_sem_entry
+        tip = frames["plectoneme_tip_nm"]
+        pl = frames["plectonemes"]
+        pt.update({
+            "twist_torque_pN_nm": ms(samples["twist_torque_pN_nm"]),
+            "twist": ms(frames["twist"]), "writhe": ms(frames["writhe"]),
+            "linking": ms(frames["twist"] + frames["writhe"]),
+            "plectonemes": ms(pl),
+            "plectoneme_length_nm": ms(frames["plectoneme_length_nm"]),
+            "plectoneme_fraction": float(np.mean(pl > 0)) if pl.size else None,
+            "plectoneme_tip_nm": float(np.nanmedian(tip)) if np.any(np.isfinite(tip))
+            else None})
+        return pt
+
+    def default_short_run(self) -> dict:
+        return {"steps": 2000, "equilibration_steps": 500, "turns": [0.0, 1.0],
+                "turn_rate": 1e-3, "frame_interval": 500}

@@ -1,0 +1,72 @@
+"""Scene ``tether``: one nicked DNA molecule between the surface and a bead pulled with a
+force F (force-extension; not turned).
+
+The chain runs from its surface tether (immobile) to the bead attachment, which carries the
+bead's friction and the force. It starts from a draw of the discrete worm-like chain.
+``self_avoidance = false`` and ``surface = false`` leave out the excluded volume and the wall:
+the exact discrete WLC under force (:mod:`dnabraid.continuum.wlc`) is then the same model.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from typing import ClassVar
+
+from .. import observables as ob
+from .. import units
+from ..forces import pull_force
+from ..geometry import random_tether
+from ._tweezer import TweezerScene
+from .base import key
+
+
+@dataclasses.dataclass(frozen=True)
+class Tether(TweezerScene):
+    name: ClassVar[str] = "tether"
+    help: ClassVar[str] = ("one nicked DNA molecule between surface and bead under force: "
+                           "force-extension")
+
+    force_pN: float = key(1.0, "pN", "constant force pulling the magnetic bead up (> 0)")
+    length_nm: float = key(300.0, "nm", "contour length of the DNA molecule")
+    turns: tuple = key((0.0,), "turns", "a nicked tether holds no turns: [0]")
+    self_avoidance: bool = key(True, "", "false: no excluded volume between DNA beads (the "
+                               "exact discrete WLC's model, for calibration)")
+
+    def validate(self) -> None:
+        super().validate()
+        self.need(self.turns == (0.0,), "turns",
+                  "a nicked single tether cannot hold turns; use turns=[0]")
+
+    def attach(self, kit) -> dict:
+        d = kit.dna
+        zeta_phys = units.stokes_friction(self.bead_radius_nm)
+        zeta_attach = max(d.zeta_bead, self.bead_friction_factor * zeta_phys)
+        pos = random_tether(self.n_beads, self.bead_spacing_nm, d.kappa_kT, self.seed,
+                            z_min=0.5 * d.diameter_nm if self.surface else None)
+        chain = kit.add_chain(pos, "A", last_friction=zeta_attach)
+        kit.add_stretch(self.stretch)
+        kit.add_bend()
+        n_excl = kit.add_excluded_volume() if self.self_avoidance else 0
+        if self.surface:
+            kit.add_wall()
+        att = int(chain[-1])
+        kit.add_force(pull_force([att], [1.0], self.force_pN, name="pull"), "pull")
+        kit.bound("stretch", "bend", "wca", "chiral")
+        kit.bound("wall", "stretch")
+        kit.attachments = [att]
+        return {"zeta_attach_pN_ns_per_nm": zeta_attach,
+                "zeta_center_pN_ns_per_nm": zeta_attach,
+                "zeta_bead_physical_pN_ns_per_nm": zeta_phys,
+                "wall_k_pN_per_nm": d.wall_k if self.surface else 0.0,
+                "n_exclusions": n_excl}
+
+    def observables(self, model) -> list:
+        return [ob.Extension(model.attachments)]
+
+    def notes(self, model) -> list[str]:
+        p = model.params
+        return self.bead_notes(p["zeta_attach_pN_ns_per_nm"],
+                               p["zeta_bead_physical_pN_ns_per_nm"])
+
+    def default_short_run(self) -> dict:
+        return {"steps": 2000, "equilibration_steps": 500, "frame_interval": 500}
