@@ -1,26 +1,72 @@
 """Force-field parameters of double-stranded DNA as functions of salt.
 
-Reads ``forcefields/dna.toml`` (shipped inside the package). Every number there names
-its literature source; this module only interpolates.
+Reads the tables of the top-level ``forcefields/`` directory (``dna.toml``, ``chiral.toml``),
+installed as the resource package ``dnabraid.forcefields``. Every number there names its
+literature source; this module only reads, interpolates and extrapolates.
+
+Each table is parsed once per process (:func:`load_toml` hands out deep copies, so callers
+cannot change what the next caller reads). Outside the tabulated salt range
+:func:`salt_parameters` and :func:`chiral_parameters` extrapolate, set ``extrapolated`` and
+emit a :class:`SaltExtrapolationWarning`, once per table and salt value.
 """
 
 from __future__ import annotations
 
+import copy
 import dataclasses
+import functools
 import math
-import sys
+import warnings
 from importlib import resources
+from pathlib import Path
 
-if sys.version_info >= (3, 11):
-    import tomllib
-else:  # pragma: no cover
-    import tomli as tomllib
+from dnabraid import tomlio
+
+__all__ = ["Mechanics", "SaltExtrapolationWarning", "SaltParameters", "bending_stiffness_kT",
+           "chiral_parameters", "debye_length_nm", "load_toml", "mechanics",
+           "mechanics_parameters", "salt_parameters"]
+
+#: Where the tables live in a source checkout (used only when the package
+#: ``dnabraid.forcefields`` is not importable, i.e. the project is not installed).
+_SOURCE_DIR = Path(__file__).resolve().parent.parent / "forcefields"
+
+
+class SaltExtrapolationWarning(UserWarning):
+    """A salt concentration outside a force-field table: the value is extrapolated."""
+
+
+@functools.cache
+def _table(name: str) -> dict:
+    """Parsed ``forcefields/<name>``, read once per process. Never hand this out: it is shared."""
+    try:
+        path = resources.files("dnabraid.forcefields").joinpath(name)
+    except ModuleNotFoundError:  # a source checkout on sys.path, not installed
+        path = _SOURCE_DIR / name
+    return tomlio.loads(path.read_text(encoding="utf-8"))
 
 
 def load_toml(name: str) -> dict:
-    """Load ``dnabraid/forcefields/<name>`` as a dict."""
-    with resources.files("dnabraid.forcefields").joinpath(name).open("rb") as fh:
-        return tomllib.load(fh)
+    """The table ``forcefields/<name>`` (e.g. ``"dna.toml"``) as a dict.
+
+    The file is parsed once per process; each call returns a deep copy, so changing the
+    result changes nothing for other callers.
+    """
+    return copy.deepcopy(_table(name))
+
+
+_WARNED: set[tuple[str, float]] = set()
+
+
+def _warn_extrapolated(table: str, salt_mM: float, lo: float, hi: float, how: str,
+                       source: str) -> None:
+    """Emit one :class:`SaltExtrapolationWarning` per ``(table, salt_mM)``."""
+    key = (table, float(salt_mM))
+    if key in _WARNED:
+        return
+    _WARNED.add(key)
+    warnings.warn(f"salt {salt_mM:g} mM is outside the range {lo:g}-{hi:g} mM tabulated in "
+                  f"forcefields/{table}; {how} (source: {source})",
+                  SaltExtrapolationWarning, stacklevel=3)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -50,15 +96,23 @@ def debye_length_nm(salt_mM: float) -> float:
     """Debye length lambda_D = 0.304 nm / sqrt(I/M) of a 1:1 salt at 25 C."""
     if not salt_mM > 0:
         raise ValueError(f"salt_mM must be > 0, got {salt_mM!r}")
-    pref = load_toml("dna.toml")["electrostatics"]["debye_prefactor_nm"]
+    pref = _table("dna.toml")["electrostatics"]["debye_prefactor_nm"]
     return pref / math.sqrt(salt_mM / 1000.0)
 
 
 def salt_parameters(salt_mM: float) -> SaltParameters:
-    """Effective diameter and Debye length at ``salt_mM`` (monovalent salt, mM)."""
-    if not (isinstance(salt_mM, (int, float)) and math.isfinite(salt_mM) and salt_mM > 0):
+    """Effective diameter and Debye length at ``salt_mM`` (monovalent salt, mM).
+
+    Between the points of ``[effective_diameter]`` in ``dna.toml`` the diameter is
+    interpolated linearly in log(salt). Outside them, ``d - d_bare`` scales with the Debye
+    length from the nearest end point (growing like lambda_D at low salt, tending to the bare
+    duplex at high salt), ``extrapolated`` is True and a :class:`SaltExtrapolationWarning`
+    names the salt, the table range and the source (once per salt value).
+    """
+    if isinstance(salt_mM, bool) or not (isinstance(salt_mM, (int, float))
+                                         and math.isfinite(salt_mM) and salt_mM > 0):
         raise ValueError(f"salt_mM must be a positive number (mM), got {salt_mM!r}")
-    table = load_toml("dna.toml")["effective_diameter"]
+    table = _table("dna.toml")["effective_diameter"]
     cs = table["salt_mM"]
     ds = table["diameter_nm"]
     lam = debye_length_nm(salt_mM)
@@ -78,12 +132,59 @@ def salt_parameters(salt_mM: float) -> SaltParameters:
                 t = (x - xs[i]) / (xs[i + 1] - xs[i])
                 d = ds[i] + t * (ds[i + 1] - ds[i])
                 break
+    if extrapolated:
+        _warn_extrapolated("dna.toml", salt_mM, cs[0], cs[-1],
+                           f"effective diameter extrapolated with the Debye length to "
+                           f"{d:.3g} nm", table["source"])
     return SaltParameters(float(salt_mM), lam, float(d), extrapolated, table["source"])
 
 
+@dataclasses.dataclass(frozen=True)
+class Mechanics:
+    """The ``[mechanics]`` table of ``dna.toml``: elastic constants of the double helix.
+
+    Attributes
+    ----------
+    persistence_nm : float
+        Bending persistence length A (at >= ~100 mM monovalent salt).
+    stretch_modulus_pN : float
+        Stretch modulus S.
+    twist_persistence_nm : float
+        Twist persistence length C.
+    rise_nm_per_bp : float
+        Helical rise per base pair.
+    hydrodynamic_radius_fraction : float
+        Bead Stokes radius as a fraction of the bead spacing.
+    persistence_source, stretch_modulus_source, twist_persistence_source,
+    hydrodynamic_source : str
+        Literature source of each number.
+    """
+
+    persistence_nm: float
+    stretch_modulus_pN: float
+    twist_persistence_nm: float
+    rise_nm_per_bp: float
+    hydrodynamic_radius_fraction: float
+    persistence_source: str
+    stretch_modulus_source: str
+    twist_persistence_source: str
+    hydrodynamic_source: str
+
+
+@functools.cache
+def mechanics_parameters() -> Mechanics:
+    """The ``[mechanics]`` table of ``dna.toml`` as a (frozen) :class:`Mechanics`."""
+    m = _table("dna.toml")["mechanics"]
+    return Mechanics(**{f.name: str(m[f.name]) if f.name.endswith("_source") else
+                        float(m[f.name]) for f in dataclasses.fields(Mechanics)})
+
+
 def mechanics() -> dict:
-    """The ``[mechanics]`` table of dna.toml (persistence, stretch modulus, ...)."""
-    return dict(load_toml("dna.toml")["mechanics"])
+    """The ``[mechanics]`` table of dna.toml as a new dict (persistence, stretch modulus, ...).
+
+    See :func:`mechanics_parameters` for the typed form.
+    """
+    return dict(_table("dna.toml")["mechanics"])
 
 
 def bending_stiffness_kT(bead_spacing_nm: float, persistence_nm: float) -> float:
@@ -128,7 +229,8 @@ def chiral_parameters(salt_mM: float) -> dict:
     """Chiral strength alpha (pN) and its bracket at ``salt_mM``, from ``chiral.toml``.
 
     Log-linear interpolation in salt between the tabulated values; outside the table the
-    nearest entry is used and ``extrapolated`` is True. The range of the interaction is the
+    nearest entry is used, ``extrapolated`` is True and a :class:`SaltExtrapolationWarning`
+    is emitted (once per salt value). The range of the interaction is the
     Debye length (:func:`debye_length_nm`), as in the table's ``range_nm``.
 
     Returns
@@ -136,16 +238,21 @@ def chiral_parameters(salt_mM: float) -> dict:
     dict with ``alpha_pN``, ``alpha_min_pN``, ``alpha_max_pN``, ``range_nm``,
     ``extrapolated`` and ``source``.
     """
-    if not (isinstance(salt_mM, (int, float)) and math.isfinite(salt_mM) and salt_mM > 0):
+    if isinstance(salt_mM, bool) or not (isinstance(salt_mM, (int, float))
+                                         and math.isfinite(salt_mM) and salt_mM > 0):
         raise ValueError(f"salt_mM must be a positive number (mM), got {salt_mM!r}")
-    table = sorted(((float(k), v) for k, v in load_toml("chiral.toml")["salt"].items()),
+    table = sorted(((float(k), v) for k, v in _table("chiral.toml")["salt"].items()),
                    key=lambda kv: kv[0])
     cs = [c for c, _ in table]
     out = {"range_nm": debye_length_nm(salt_mM), "extrapolated": not cs[0] <= salt_mM <= cs[-1]}
     keys = ("alpha_pN", "alpha_min_pN", "alpha_max_pN")
     if salt_mM <= cs[0] or salt_mM >= cs[-1]:
-        entry = table[0][1] if salt_mM <= cs[0] else table[-1][1]
+        end, entry = table[0] if salt_mM <= cs[0] else table[-1]
         out.update({k: float(entry[k]) for k in keys}, source=entry["source"])
+        if out["extrapolated"]:
+            _warn_extrapolated("chiral.toml", salt_mM, cs[0], cs[-1],
+                               f"alpha held at its {end:g} mM value {out['alpha_pN']:g} pN",
+                               entry["source"])
         return out
     for (c0, e0), (c1, e1) in zip(table[:-1], table[1:]):
         if c0 <= salt_mM <= c1:

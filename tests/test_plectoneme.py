@@ -10,9 +10,7 @@ import numpy as np
 import pytest
 
 from dnabraid.analysis import twist as atw
-from dnabraid.build import build
-from dnabraid.runner import run_scene
-from dnabraid.scene import SceneError, make_scene
+from dnabraid.scenes import SceneError, make_scene
 
 Z_TOL = 4.0
 #: Linking number: Tw + Wr must equal the imposed turns to 1 % (the bead lags the trap by
@@ -22,7 +20,7 @@ LK_RTOL = 0.01
 
 def test_scene_keys_and_validation():
     s = make_scene("plectoneme")
-    assert s.twisted and s.turned and s.twist_persistence_nm == 100.0
+    assert s.twist_persistence_nm == 100.0
     assert "twist_persistence_nm" in s.to_dict()
     assert "twist_persistence_nm" not in make_scene("braid").to_dict()
     with pytest.raises(SceneError, match="twist_persistence_nm"):
@@ -37,10 +35,10 @@ def test_scene_keys_and_validation():
 
 
 def test_chiral_term_built_for_plectoneme():
-    m = build(make_scene("plectoneme", {"length_nm": 100.0, "alpha": 0.5}))
+    m = make_scene("plectoneme", {"length_nm": 100.0, "alpha": 0.5}).build()
     assert "chiral" in m.forces
     assert "chiral" in m.params["rates_per_ns"]
-    m0 = build(make_scene("plectoneme", {"length_nm": 100.0}))
+    m0 = make_scene("plectoneme", {"length_nm": 100.0}).build()
     assert "chiral" not in m0.forces
 
 
@@ -94,26 +92,25 @@ def twisted_run(tmp_path_factory):
     s = make_scene("plectoneme", {"length_nm": 60.0, "force_pN": 2.0, "turns": [0.0, 1.5],
                                   "steps": 16_000, "equilibration_steps": 4000,
                                   "turn_rate": 2e-4, "frame_interval": 1000, "seed": 3})
-    return s, str(out), run_scene(s, str(out))
+    return s, str(out), s.run(str(out))
 
 
 def test_linking_number_conserved(twisted_run):
     """Tw + Wr equals the bead turns in every frame (no passage), and the imposed turns to 1 %."""
     s, out, summ = twisted_run
-    from dnabraid.protocols import PointResult
+    from dnabraid.reporters import read_point
 
-    ck = os.path.join(out, "checkpoints")
-    for f in sorted(os.listdir(ck)):
-        if not f.startswith("point"):
-            continue
-        r = PointResult.load(os.path.join(ck, f))
-        lk = r.twist + r.writhe
-        assert np.all(np.abs(lk - r.turns) <= LK_RTOL * max(abs(r.turns), 1.0)), (r.turns, lk)
+    pdir = os.path.join(out, "points")
+    for f in sorted(os.listdir(pdir)):
+        samples, frames = read_point(os.path.join(pdir, f))
+        turns = float(frames["turns"][0])
+        lk = frames["twist"] + frames["writhe"]
+        assert np.all(np.abs(lk - turns) <= LK_RTOL * max(abs(turns), 1.0)), (turns, lk)
         # frames are taken at observable samples: Lk = bead angle to round-off
-        idx = np.searchsorted(r.step, r.frame_step)
-        np.testing.assert_allclose(lk, r.bead_angle_turns[idx], atol=1e-6)
-        if r.turns != 0:
-            assert np.std(r.writhe) > 0.005  # twist and writhe really exchange
+        idx = np.searchsorted(samples["step"], frames["step"])
+        np.testing.assert_allclose(lk, samples["bead_angle_turns"][idx], atol=1e-6)
+        if turns != 0:
+            assert np.std(frames["writhe"]) > 0.005  # twist and writhe really exchange
 
 
 def test_torque_estimators_agree(twisted_run):

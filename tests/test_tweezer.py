@@ -12,11 +12,9 @@ import numpy as np
 import pytest
 
 from dnabraid.analysis.geometry import bending_cosines
-from dnabraid.build import build
 from dnabraid.continuum.wlc import discrete_wlc_extension
 from dnabraid.engine import Engine, SimulationBlowUp
-from dnabraid.runner import run_scene
-from dnabraid.scene import make_scene
+from dnabraid.scenes import make_scene
 
 #: |simulation - theory| must be below Z_TOL standard errors of the mean ...
 Z_TOL = 4.0
@@ -26,7 +24,7 @@ MODEL_RTOL = 0.01
 
 
 def discrete_theory(s):
-    m = build(s)
+    m = s.build()
     p = m.params
     return discrete_wlc_extension(s.force_pN, s.n_beads - 1, s.bead_spacing_nm, p["kappa_kT"],
                                   p["kT_pN_nm"], stretch_k_pN_per_nm=p["k_bond_pN_per_nm"])
@@ -46,7 +44,7 @@ def test_tether_matches_discrete_wlc(tmp_path, force, length, steps):
     s = make_scene("tether", {"force_pN": force, "length_nm": length, "steps": steps,
                               "equilibration_steps": 20_000, "surface": False, "seed": 7,
                               "frame_interval": 10_000})
-    summ = run_scene(s, str(tmp_path / "run"))
+    summ = s.run(str(tmp_path / "run"))
     ext = summ["points"][0]["extension_nm"]
     theory = discrete_theory(s)["extension_nm"]
     err = abs(ext["mean"] - theory)
@@ -61,12 +59,13 @@ def test_persistence_from_bending_cosines(tmp_path):
     s = make_scene("tether", {"force_pN": 0.05, "length_nm": 100.0, "steps": 200_000,
                               "equilibration_steps": 10_000, "surface": False, "seed": 3,
                               "frame_interval": 500})
-    run_scene(s, str(tmp_path / "run"))
-    from dnabraid.protocols import PointResult
+    s.run(str(tmp_path / "run"))
+    import MDAnalysis as mda
 
-    ck = [f for f in os.listdir(tmp_path / "run" / "checkpoints") if f.startswith("point")]
-    frames = PointResult.load(str(tmp_path / "run" / "checkpoints" / ck[0])).frames
-    cos = np.array([bending_cosines(f).mean() for f in frames])
+    u = mda.Universe(str(tmp_path / "run" / "topology.pdb"),
+                     str(tmp_path / "run" / "trajectory.dcd"))
+    dna = u.select_atoms("chainID A")
+    cos = np.array([bending_cosines(dna.positions / 10.0).mean() for _ in u.trajectory])
     from dnabraid.analysis.stats import mean_sem
 
     r = mean_sem(cos)
@@ -82,7 +81,7 @@ def braid_run(tmp_path_factory):
     s = make_scene("braid", {"length_nm": 150.0, "tether_separation_nm": 30.0,
                              "turns": [-2, 0, 2], "steps": 150_000,
                              "equilibration_steps": 30_000, "seed": 11})
-    return s, str(out), run_scene(s, str(out))
+    return s, str(out), s.run(str(out))
 
 
 def test_braid_symmetric_at_zero_chirality(braid_run):
@@ -135,38 +134,37 @@ def test_run_directory_is_self_describing(braid_run):
 
 
 def test_resume_skips_finished_points(braid_run, tmp_path):
+    """A finished point is not run again; a removed one is rerun from its start checkpoint
+    and ends with the same numbers (the checkpoint holds the random-number state)."""
     s, out, summ = braid_run
     import shutil
 
     copy = tmp_path / "copy"
     shutil.copytree(out, copy)
-    ck = copy / "checkpoints"
-    victim = sorted(f for f in os.listdir(ck) if f.startswith("point"))[-1]  # turns = +2
-    os.remove(ck / victim)
-    kept = {f: os.path.getmtime(ck / f) for f in os.listdir(ck) if f.startswith("point")}
-    summ2 = run_scene(s, str(copy))
+    pts = copy / "points"
+    victim = sorted(os.listdir(pts))[-1]  # the last point run (turns = -2)
+    shutil.rmtree(pts / victim)
+    kept = {f: os.path.getmtime(pts / f / "done.json") for f in os.listdir(pts)}
+    summ2 = s.run(str(copy))
     for f, t in kept.items():
-        assert os.path.getmtime(ck / f) == t  # not rerun
-    assert os.path.exists(ck / victim)
-    old = {p["turns"]: p for p in summ["points"]}
-    new = {p["turns"]: p for p in summ2["points"]}
-    assert new[0.0]["extension_nm"]["mean"] == old[0.0]["extension_nm"]["mean"]
-    assert new[2.0]["catenation"]["mean"] == pytest.approx(2.0, abs=0.01)
+        assert os.path.getmtime(pts / f / "done.json") == t  # not rerun
+    assert os.path.exists(pts / victim / "done.json")
+    assert summ2["points"] == summ["points"]
 
 
 def test_resume_refuses_a_different_scene(braid_run):
-    from dnabraid.scene import SceneError
+    from dnabraid.rundir import RunDirError
 
     s, out, summ = braid_run
     other = make_scene("braid", {"length_nm": 150.0, "tether_separation_nm": 30.0,
                                  "turns": [-2, 0, 2], "force_pN": 3.0})
-    with pytest.raises(SceneError, match="force_pN"):
-        run_scene(other, out)
+    with pytest.raises(RunDirError, match="force_pN"):
+        other.run(out)
 
 
 def test_blow_up_names_step_and_term(tmp_path):
     s = make_scene("braid", {"length_nm": 100.0, "tether_separation_nm": 20.0})
-    m = build(s)
+    m = s.build()
     e = Engine(m, seed=1)
     e.minimise()
     e.integrator.setStepSize(e.integrator.getStepSize() * 40)  # far past stability

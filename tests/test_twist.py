@@ -244,10 +244,9 @@ def test_free_chain_twist_fluctuations():
 # ----------------------------------------------------------------------------- scenes
 @pytest.mark.parametrize("kind", ["braid", "tether"])
 def test_nicked_scenes_have_no_twist(kind):
-    from dnabraid.build import build
-    from dnabraid.scene import make_scene
+    from dnabraid.scenes import make_scene
 
-    m = build(make_scene(kind, {"length_nm": 100.0}))
+    m = make_scene(kind, {"length_nm": 100.0}).build()
     names = {m.system.getForce(i).getName() for i in range(m.system.getNumForces())}
     assert not any(nm.startswith(("twist", "frame")) for nm in names)
     assert "twist" not in m.forces and "frame" not in m.forces
@@ -258,11 +257,10 @@ def test_nicked_scenes_have_no_twist(kind):
 
 
 def test_plectoneme_builds_frames_and_twist():
-    from dnabraid.build import build
-    from dnabraid.scene import make_scene
+    from dnabraid.scenes import make_scene
 
     s = make_scene("plectoneme", {"length_nm": 100.0})
-    m = build(s)
+    m = s.build()
     assert {"twist", "frame", "trap", "link", "beadwall"} <= set(m.forces)
     assert len(m.sides) == s.n_beads - 1
     assert m.system.getNumParticles() == 2 * s.n_beads  # beads, sides, bead orientation

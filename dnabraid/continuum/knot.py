@@ -112,6 +112,7 @@ import numpy as np
 from scipy.linalg import LinAlgError, solveh_banded
 
 from dnabraid.continuum._result import ContinuumResult
+from dnabraid.continuum._validate import check_n, check_nonnegative, check_positive
 
 logger = logging.getLogger(__name__)
 
@@ -135,35 +136,23 @@ _SHIFT_PER_N = 4.135
 _BW = 5  # half bandwidth of the interleaved (rho, psi) Hessian
 
 
-# --------------------------------------------------------------------------- validation
-def _check_n(n) -> int:
-    if isinstance(n, bool) or not isinstance(n, (int, np.integer)):
-        raise ValueError(f"n must be an integer >= 1 (the (2n+1)_1 knot), got {n!r}")
-    if n < 1:
-        raise ValueError(f"n must be >= 1 (1: trefoil 3_1, 2: cinquefoil 5_1), got {n}")
-    return int(n)
-
-
-def _check_positive(name: str, value) -> float:
-    value = float(value)
-    if not math.isfinite(value) or value <= 0.0:
-        raise ValueError(f"{name} must be a positive finite number, got {value!r}")
-    return value
+#: What ``n`` counts, for the messages of :func:`~dnabraid.continuum._validate.check_n`.
+_N_MEANS = "the (2n+1)_1 knot: 1 trefoil 3_1, 2 cinquefoil 5_1"
 
 
 def turning_angle(n: int) -> float:
     """Total angle turned by the difference rod, ``(2n + 1) pi`` (Eq. 5-6 text), rad."""
-    return (2 * _check_n(n) + 1) * math.pi
+    return (2 * check_n(n, what=_N_MEANS) + 1) * math.pi
 
 
 def estimated_contact_end(n: int) -> float:
     """Abscissa of the last (isolated) contact, ``2.681 + 4.135 (n - 1)`` (measured)."""
-    return 2.681 + _SHIFT_PER_N * (_check_n(n) - 1)
+    return 2.681 + _SHIFT_PER_N * (check_n(n, what=_N_MEANS) - 1)
 
 
 def minimum_half_width(n: int) -> float:
     """Smallest accepted ``W``: just beyond the estimated apparent crossing ``w_c``."""
-    return 3.506 + _SHIFT_PER_N * (_check_n(n) - 1) + 0.25
+    return 3.506 + _SHIFT_PER_N * (check_n(n, what=_N_MEANS) - 1) + 0.25
 
 
 def default_half_width(n: int) -> float:
@@ -171,7 +160,7 @@ def default_half_width(n: int) -> float:
 
     ``w_c(n) ~ 3.506 + 4.135 (n - 1)`` (measured; 3.506 trefoil, 7.640 cinquefoil).
     """
-    return 3.506 + _SHIFT_PER_N * (_check_n(n) - 1) + 1.5
+    return 3.506 + _SHIFT_PER_N * (check_n(n, what=_N_MEANS) - 1) + 1.5
 
 
 # --------------------------------------------------------------------------- discrete problem
@@ -583,8 +572,8 @@ def solve_knot(n: int = 1, *, n_grid: int | None = None, half_width_W: float | N
         small (fewer than 50 intervals) or too large (spacing below 5e-4).
     """
     t0 = time.perf_counter()
-    n = _check_n(n)
-    W = default_half_width(n) if half_width_W is None else _check_positive("half_width_W",
+    n = check_n(n, what=_N_MEANS)
+    W = default_half_width(n) if half_width_W is None else check_positive("half_width_W",
                                                                            half_width_W)
     if W < minimum_half_width(n):
         raise ValueError(f"half_width_W={W:g} is too small for n={n}: the domain must extend "
@@ -600,7 +589,7 @@ def solve_knot(n: int = 1, *, n_grid: int | None = None, half_width_W: float | N
     if W / n_grid < 5e-4:
         raise ValueError(f"n_grid={n_grid} gives a spacing {W / n_grid:.2e} < 5e-4: "
                          "round-off dominates the fourth differences")
-    tol = _check_positive("tol", tol)
+    tol = check_positive("tol", tol)
     if initial is not None and not (isinstance(initial, ContinuumResult)
                                     and isinstance(initial.solution, dict)
                                     and "rho" in initial.solution):
@@ -725,7 +714,7 @@ def solve_knot_averaged(n: int = 1, *, spacings=(0.01, 0.005), n_shifts: int = 1
         ``solution``: list of per-spacing summaries.
     """
     t0 = time.perf_counter()
-    n = _check_n(n)
+    n = check_n(n, what=_N_MEANS)
     spacings = [float(x) for x in spacings]
     if len(spacings) < 2 or any(not (x > 0.0) for x in spacings):
         raise ValueError(f"spacings must hold at least two positive values, got {spacings!r}")
@@ -770,13 +759,6 @@ def solve_knot_averaged(n: int = 1, *, spacings=(0.01, 0.005), n_shifts: int = 1
 
 
 # --------------------------------------------------------------------------- tension law
-def _check_mu(mu) -> float:
-    mu = float(mu)
-    if not math.isfinite(mu) or mu < 0.0:
-        raise ValueError(f"friction coefficient mu must be >= 0, got {mu!r}")
-    return mu
-
-
 def _sign(tightening: bool) -> float:
     return 1.0 if tightening else -1.0
 
@@ -784,7 +766,7 @@ def _sign(tightening: bool) -> float:
 def scaled_tension(eps, mu: float = 0.0, sigma: float = SIGMA_TREFOIL,
                    tightening: bool = True):
     """``T h^2 / EI = eps^4 / 2 +- mu sigma eps^3`` (Eq. 8), ``eps = sqrt(h / R)``."""
-    mu = _check_mu(mu)
+    mu = check_nonnegative("mu", mu)
     eps = np.asarray(eps, dtype=float)
     return eps**4 / 2.0 + _sign(tightening) * mu * sigma * eps**3  # Eq. 8
 
@@ -811,8 +793,8 @@ def tension_from_radius(radius, *, thickness: float, bending_stiffness: float,
     float or ndarray
         ``T`` (force unit, e.g. pN).  ``mu = 0`` gives ``EI / (2 R^2)`` (Eq. 1).
     """
-    h = _check_positive("thickness", thickness)
-    EI = _check_positive("bending_stiffness", bending_stiffness)
+    h = check_positive("thickness", thickness)
+    EI = check_positive("bending_stiffness", bending_stiffness)
     R = np.asarray(radius, dtype=float)
     if np.any(~np.isfinite(R)) or np.any(R <= 0.0):
         raise ValueError(f"radius must be positive and finite, got {radius!r}")
@@ -831,7 +813,7 @@ def epsilon_from_scaled_tension(tau: float, mu: float = 0.0, sigma: float = SIGM
     ``tau >= -27 (mu sigma)^4 / 32`` (``tau = 0``: ``eps = eps_0``, Eq. 9).
     """
     tau = float(tau)
-    mu = _check_mu(mu)
+    mu = check_nonnegative("mu", mu)
     a = mu * sigma
     if tightening:
         if tau <= 0.0:
@@ -858,22 +840,22 @@ def radius_from_tension(tension: float, *, thickness: float, bending_stiffness: 
 
     ``mu = 0``: ``R = sqrt(EI / (2 T))`` (Eq. 1).
     """
-    h = _check_positive("thickness", thickness)
-    EI = _check_positive("bending_stiffness", bending_stiffness)
+    h = check_positive("thickness", thickness)
+    EI = check_positive("bending_stiffness", bending_stiffness)
     eps = epsilon_from_scaled_tension(float(tension) * h**2 / EI, mu, sigma, tightening)
     return h / eps**2
 
 
 def braid_length(radius: float, thickness: float, w_c: float = W_C_TREFOIL) -> float:
     """Braid length between the apparent crossings, ``l = 2 w_c sqrt(2 h R)`` (Eq. 7)."""
-    R = _check_positive("radius", radius)
-    h = _check_positive("thickness", thickness)
+    R = check_positive("radius", radius)
+    h = check_positive("thickness", thickness)
     return 2.0 * float(w_c) * math.sqrt(2.0 * h * R)  # Eq. 7
 
 
 def lock_epsilon(mu: float, sigma: float = SIGMA_TREFOIL) -> float:
     """``eps_0 = 2 mu sigma``: the knot locked by friction at ``T = 0`` (Eq. 8-9)."""
-    return 2.0 * _check_mu(mu) * sigma
+    return 2.0 * check_nonnegative("mu", mu) * sigma
 
 
 def friction_from_lock(eps0: float, sigma: float = SIGMA_TREFOIL) -> float:
@@ -881,7 +863,7 @@ def friction_from_lock(eps0: float, sigma: float = SIGMA_TREFOIL) -> float:
     eps0 = float(eps0)
     if not math.isfinite(eps0) or eps0 < 0.0:
         raise ValueError(f"eps0 must be >= 0, got {eps0!r}")
-    return eps0 / (2.0 * _check_positive("sigma", sigma))  # Eq. 9
+    return eps0 / (2.0 * check_positive("sigma", sigma))  # Eq. 9
 
 
 # --------------------------------------------------------------------------- CLI / workflow

@@ -76,6 +76,7 @@ from scipy.optimize import brentq, minimize_scalar
 from scipy.special import ellipe, ellipkm1
 
 from dnabraid.continuum._result import ContinuumResult
+from dnabraid.continuum._validate import check_n, check_nonnegative, check_positive
 
 logger = logging.getLogger(__name__)
 
@@ -107,38 +108,8 @@ LOOP_EXCESS_LARGE_X = 8.0
 DEFAULT_X_MAX = 200.0
 
 _BVP_STATUS = {0: 0, 1: 1, 2: 2, 3: 4}
-
-
-# --------------------------------------------------------------------------- validation
-def _check_positive(name: str, value: float) -> float:
-    try:
-        value = float(value)
-    except (TypeError, ValueError) as exc:
-        raise ValueError(f"{name} must be a positive finite number, got {value!r}") from exc
-    if not math.isfinite(value) or value <= 0.0:
-        raise ValueError(f"{name} must be a positive finite number, got {value!r}")
-    return value
-
-
-def _check_nonnegative(name: str, value: float) -> float:
-    try:
-        value = float(value)
-    except (TypeError, ValueError) as exc:
-        raise ValueError(f"{name} must be a finite number >= 0, got {value!r}") from exc
-    if not math.isfinite(value) or value < 0.0:
-        raise ValueError(f"{name} must be a finite number >= 0, got {value!r}")
-    return value
-
-
-def _check_n(n) -> int:
-    """Unknotting number: an integer ``>= 1`` (``n = (chi - 1)/2``, seed)."""
-    try:
-        nf = float(n)
-    except (TypeError, ValueError) as exc:
-        raise ValueError(f"n (unknotting number) must be an integer >= 1, got {n!r}") from exc
-    if not math.isfinite(nf) or nf < 1.0 or nf != round(nf):
-        raise ValueError(f"n (unknotting number) must be an integer >= 1, got {n!r}")
-    return int(round(nf))
+#: What ``n`` counts, for the messages of :func:`~dnabraid.continuum._validate.check_n`.
+_N_MEANS = "unknotting number, n = (chi - 1)/2"
 
 
 # --------------------------------------------------------------------------- helical braid
@@ -195,7 +166,7 @@ def optimal_kbar_ansatz(n: int) -> float:
     ``-B L/(4R^2) + B n pi (h^(1/2)/R^(3/2)) [Ebar(kbar) - kbar/(n pi)]``, so the optimum
     depends on ``n`` only and tends to ``12^(-1/4)`` (Eq. (3)) as ``n -> inf``.
     """
-    n = _check_n(n)
+    n = check_n(n, what=_N_MEANS)
     res = minimize_scalar(lambda kb: float(braid_energy_bar(kb)) - kb / (n * math.pi),
                           bounds=(1e-3, 5.0), method="bounded",
                           options={"xatol": 1e-12})
@@ -208,14 +179,14 @@ def w_c_helical(n) -> float:
     Defined by ``ell = 2 w_c sqrt(2 h R)`` (seed, after Eq. (3)); equals ``3^(1/4) pi n``:
     4.13 for ``n = 1``, 8.27 for ``n = 2`` (seed).
     """
-    n = _check_n(n)
+    n = check_n(n, what=_N_MEANS)
     return math.pi * n / (math.sqrt(2.0) * K_BAR)  # seed: w_c = pi n/(sqrt 2 kbar)
 
 
 def wave_number(h: float, R: float) -> float:
     """Helical wave number ``k = (sqrt(12) h R)^(-1/2)`` (seed Eq. (3)), 1/length."""
-    h = _check_positive("h", h)
-    R = _check_positive("R", R)
+    h = check_positive("h", h)
+    R = check_positive("R", R)
     return (math.sqrt(12.0) * h * R) ** -0.5  # Eq. (3)
 
 
@@ -243,11 +214,11 @@ def helical_braid(n, h: float, R: float, B: float = 1.0, mu: float = 0.0) -> dic
         (``2 n pi B h k^3``), ``F`` (``mu P``, Eq. (4)), ``F_over_Bk2``, ``two_pi_n_h_k``
         (the abscissa of the seed's Fig. 2(d)).
     """
-    n = _check_n(n)
-    h = _check_positive("h", h)
-    R = _check_positive("R", R)
-    B = _check_positive("B", B)
-    mu = _check_nonnegative("mu", mu)
+    n = check_n(n, what=_N_MEANS)
+    h = check_positive("h", h)
+    R = check_positive("R", R)
+    B = check_positive("B", B)
+    mu = check_nonnegative("mu", mu)
     k = wave_number(h, R)  # Eq. (3)
     ell = 2.0 * n * math.pi / k  # seed: ell = 2 n pi/k
     P = 2.0 * n * math.pi * B * h * k**3  # seed: P = 2 n pi B h k^3
@@ -347,7 +318,7 @@ def g_closed_form(x: float, *, xtol: float = 1e-14) -> float:
 
 def loop_closed_form_at(x: float, *, xtol: float = 1e-14) -> dict:
     """:func:`loop_closed_form` at a given ``x = ell/R`` (root of ``x(m)`` by ``brentq``)."""
-    x = _check_nonnegative("x", x)
+    x = check_nonnegative("x", x)
     if x == 0.0:
         return loop_closed_form(0.0)
     if x > X_MAX_CLOSED_FORM:
@@ -439,8 +410,8 @@ def solve_loop_elastica(x: float, *, tol: float = 1e-8, n_nodes: int = 41,
         ``solution`` is the ``BVPResult``.
     """
     t0 = time.perf_counter()
-    x = _check_nonnegative("x", x)
-    tol = _check_positive("tol", tol)
+    x = check_nonnegative("x", x)
+    tol = check_positive("tol", tol)
     if int(n_nodes) < 3:
         raise ValueError(f"n_nodes must be >= 3, got {n_nodes!r}")
     if initial is not None and initial.solution is not None and initial.success:
@@ -577,7 +548,7 @@ def g_table(x_values: Sequence[float] | None = None, *, x_max: float = DEFAULT_X
     """
     t0 = time.perf_counter()
     if x_values is None:
-        xs = _default_x_grid(_check_positive("x_max", x_max), int(n_points))
+        xs = _default_x_grid(check_positive("x_max", x_max), int(n_points))
     else:
         xs = np.asarray(x_values, dtype=float)
         if xs.ndim != 1 or xs.size < 4 or xs[0] != 0.0 or np.any(np.diff(xs) <= 0):
@@ -633,8 +604,8 @@ def g_asymptotic_large(x):
 
 # --------------------------------------------------------------------------- master curve
 def _check_inputs(e, n, h, B, mu):
-    return (_check_positive("e", e), _check_n(n), _check_positive("h", h),
-            _check_positive("B", B), _check_nonnegative("mu", mu))
+    return (check_positive("e", e), check_n(n, what=_N_MEANS), check_positive("h", h),
+            check_positive("B", B), check_nonnegative("mu", mu))
 
 
 def _g_callable(method: str, table: GTable | None) -> tuple[Callable[[float], float], float]:
@@ -843,10 +814,10 @@ def shortening_from_force(F: float, n, h: float, B: float, mu: float, *,
 
     Raises ValueError for ``mu = 0`` (``x`` is undetermined: ``F = 0`` for every ``e``).
     """
-    F = _check_positive("F", F)
-    n = _check_n(n)
-    h, B = _check_positive("h", h), _check_positive("B", B)
-    mu = _check_positive("mu", mu)
+    F = check_positive("F", F)
+    n = check_n(n, what=_N_MEANS)
+    h, B = check_positive("h", h), check_positive("B", B)
+    mu = check_positive("mu", mu)
     x = (C5_FORCE * n * n * F * h * h / (mu * B)) ** (1.0 / 3.0)  # Eq. (5), argument of g
     g, x_hi = _g_callable(method, table)
     if x > x_hi:  # beyond the table: the closed form reaches further
@@ -892,7 +863,7 @@ def cli_add_arguments(parser: argparse.ArgumentParser) -> None:
 def cli_run(args) -> dict:
     """Solve the overhand-knot master curve for ``args``; JSON-serialisable summary."""
     t0 = time.perf_counter()
-    n = _check_n(args.n)
+    n = check_n(args.n, what=_N_MEANS)
     out = {"problem": "overhand", "n": n, "h": float(args.h), "B": float(args.B),
            "mu": float(args.mu), "method": args.method, "k_bar": K_BAR,
            "w_c_helical": w_c_helical(n)}

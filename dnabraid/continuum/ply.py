@@ -60,7 +60,9 @@ import numpy as np
 from scipy.integrate import solve_bvp
 from scipy.optimize import brentq
 
+from dnabraid import forcefield
 from dnabraid.continuum._result import ContinuumResult
+from dnabraid.continuum._validate import check_finite, check_nonnegative, check_positive
 from dnabraid.units import kT
 
 logger = logging.getLogger(__name__)
@@ -71,36 +73,15 @@ LOCKUP_ANGLE_RAD = math.pi / 4.0
 LOCKUP_ANGLE_DEG = 45.0
 #: Pitch over radius at lock-up: the densest packing (slide 18).
 LOCKUP_PITCH_OVER_RADIUS = 2.0 * math.pi
-#: Persistence length used for the default bending stiffness, nm.
-DEFAULT_PERSISTENCE_NM = 50.0
-#: Default bending stiffness ``kT * 50 nm`` at 298.15 K, pN nm^2.
+#: Persistence length used for the default bending stiffness, nm: ``persistence_nm`` of
+#: ``forcefields/dna.toml`` (50 nm).
+DEFAULT_PERSISTENCE_NM = forcefield.mechanics_parameters().persistence_nm
+#: Default bending stiffness ``kT * DEFAULT_PERSISTENCE_NM`` at 298.15 K, pN nm^2.
 DEFAULT_BENDING_PN_NM2 = kT(298.15) * DEFAULT_PERSISTENCE_NM
 #: Angles closer than this to lock-up count as "at lock-up", rad.
 LOCKUP_MARGIN_RAD = 1e-9
 
 _BVP_STATUS = {0: 0, 1: 1, 2: 2, 3: 4}
-
-
-# --------------------------------------------------------------------------- validation
-def _check_positive(name: str, value: float) -> float:
-    value = float(value)
-    if not math.isfinite(value) or value <= 0.0:
-        raise ValueError(f"{name} must be a positive finite number, got {value!r}")
-    return value
-
-
-def _check_finite(name: str, value: float) -> float:
-    value = float(value)
-    if not math.isfinite(value):
-        raise ValueError(f"{name} must be finite, got {value!r}")
-    return value
-
-
-def _check_force(value: float) -> float:
-    value = float(value)
-    if not math.isfinite(value) or value < 0.0:
-        raise ValueError(f"force_pN must be >= 0 (tension), got {value!r}")
-    return value
 
 
 # --------------------------------------------------------------------------- geometry
@@ -292,12 +273,12 @@ def solve_uniform_ply(force_pN: float, torque_pN_nm: float, delta_nm: float, *,
         ``packing_fraction``.  ``status=3`` when no stable ply exists below lock-up.
     """
     t0 = time.perf_counter()
-    force_pN = _check_force(force_pN)
-    torque_pN_nm = _check_finite("torque_pN_nm", torque_pN_nm)
-    delta_nm = _check_positive("delta_nm", delta_nm)
-    bending_pN_nm2 = _check_positive("bending_pN_nm2", bending_pN_nm2)
-    alpha_pN = _check_finite("alpha_pN", alpha_pN)
-    twist_moment_pN_nm = _check_finite("twist_moment_pN_nm", twist_moment_pN_nm)
+    force_pN = check_nonnegative("force_pN", force_pN)
+    torque_pN_nm = check_finite("torque_pN_nm", torque_pN_nm)
+    delta_nm = check_positive("delta_nm", delta_nm)
+    bending_pN_nm2 = check_positive("bending_pN_nm2", bending_pN_nm2)
+    alpha_pN = check_finite("alpha_pN", alpha_pN)
+    twist_moment_pN_nm = check_finite("twist_moment_pN_nm", twist_moment_pN_nm)
     if int(n_grid) < 3:
         raise ValueError(f"n_grid must be >= 3, got {n_grid!r}")
     args = (force_pN, torque_pN_nm, delta_nm, bending_pN_nm2, alpha_pN, twist_moment_pN_nm)
@@ -396,23 +377,23 @@ def solve_ply_bvp(length_nm: float, force_pN: float, delta_nm: float, *,
         for an exact solution).  ``status=3`` if ``|theta|`` reaches lock-up.
     """
     t0 = time.perf_counter()
-    L = _check_positive("length_nm", length_nm)
-    F = _check_force(force_pN)
-    delta_nm = _check_positive("delta_nm", delta_nm)
-    B = _check_positive("bending_pN_nm2", bending_pN_nm2)
-    alpha = _check_finite("alpha_pN", alpha_pN)
-    c_tau = _check_finite("twist_moment_pN_nm", twist_moment_pN_nm)
-    theta_end = _check_finite("theta_end_rad", theta_end_rad)
+    L = check_positive("length_nm", length_nm)
+    F = check_nonnegative("force_pN", force_pN)
+    delta_nm = check_positive("delta_nm", delta_nm)
+    B = check_positive("bending_pN_nm2", bending_pN_nm2)
+    alpha = check_finite("alpha_pN", alpha_pN)
+    c_tau = check_finite("twist_moment_pN_nm", twist_moment_pN_nm)
+    theta_end = check_finite("theta_end_rad", theta_end_rad)
     if (torque_pN_nm is None) == (ply_link is None):
         raise ValueError("give exactly one of torque_pN_nm and ply_link")
     if bc not in ("clamped", "free"):
         raise ValueError(f"bc must be 'clamped' or 'free', got {bc!r}")
     if abs(theta_end) >= LOCKUP_ANGLE_RAD:
         raise ValueError(f"|theta_end_rad| must be below lock-up (pi/4), got {theta_end}")
-    tol = _check_positive("tol", tol)
+    tol = check_positive("tol", tol)
     r = 0.5 * delta_nm
     prescribed = ply_link is not None
-    link = _check_finite("ply_link", ply_link) if prescribed else None
+    link = check_finite("ply_link", ply_link) if prescribed else None
     if prescribed and abs(2 * math.pi * link * r) >= L * math.sin(LOCKUP_ANGLE_RAD):
         wall = time.perf_counter() - t0
         return ContinuumResult(False, 3, f"ply link {link} needs |theta| >= 45 deg over "
@@ -575,7 +556,8 @@ def cli_add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--delta-nm", type=float, default=5.0, help="contact distance 2r, nm")
     parser.add_argument("--alpha-pN", type=float, default=0.0, help="chiral strength alpha, pN")
     parser.add_argument("--bending-pN-nm2", type=float, default=DEFAULT_BENDING_PN_NM2,
-                        help="bending stiffness B, pN nm^2 (default kT x 50 nm)")
+                        help="bending stiffness B, pN nm^2 (default kT x persistence_nm "
+                             "of forcefields/dna.toml)")
     parser.add_argument("--twist-moment-pN-nm", type=float, default=0.0,
                         help="strand twist moment C tau, pN nm (0 for nicked DNA)")
     parser.add_argument("--length-nm", type=float, default=None,

@@ -72,6 +72,7 @@ import numpy as np
 from scipy.optimize import minimize_scalar
 
 from dnabraid.continuum._result import ContinuumResult
+from dnabraid.continuum._validate import check_finite, check_positive
 from dnabraid.continuum.ply import (
     DEFAULT_BENDING_PN_NM2,
     LOCKUP_ANGLE_RAD,
@@ -93,20 +94,11 @@ LOCKUP_TOL_RAD = 1e-6
 
 def _validate(turns, force_pN, length_nm, tether_separation_nm, delta_nm, bending_pN_nm2,
               alpha_pN):
-    out = []
-    for name, v in (("turns", turns), ("alpha_pN", alpha_pN)):
-        v = float(v)
-        if not math.isfinite(v):
-            raise ValueError(f"{name} must be finite, got {v!r}")
-        out.append(v)
-    for name, v in (("force_pN", force_pN), ("length_nm", length_nm),
-                    ("tether_separation_nm", tether_separation_nm), ("delta_nm", delta_nm),
-                    ("bending_pN_nm2", bending_pN_nm2)):
-        v = float(v)
-        if not math.isfinite(v) or v <= 0.0:
-            raise ValueError(f"{name} must be a positive finite number, got {v!r}")
-        out.append(v)
-    n, alpha, F, L, d, delta, B = out
+    n, alpha = check_finite("turns", turns), check_finite("alpha_pN", alpha_pN)
+    F, L, d, delta, B = (check_positive(name, v) for name, v in (
+        ("force_pN", force_pN), ("length_nm", length_nm),
+        ("tether_separation_nm", tether_separation_nm), ("delta_nm", delta_nm),
+        ("bending_pN_nm2", bending_pN_nm2)))
     if d < delta:
         raise ValueError(f"tether_separation_nm ({d}) must be >= delta_nm ({delta}): the "
                          "tethered strands would overlap")
