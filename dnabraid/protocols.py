@@ -60,6 +60,11 @@ class Segment:
 class TurnSchedule:
     """The tweezer schedule of a scene's turn values.
 
+    ``mode = "independent"``: every turn value starts from the initial (equilibrium) state
+    and is ramped there from 0, so points do not depend on each other or on the path;
+    ``mode = "ramp"``: the up and down branches described in the module docstring (one
+    ramp through all values: hysteresis shows as a difference between branches).
+
     Parameters
     ----------
     turns : sequence of float
@@ -69,9 +74,20 @@ class TurnSchedule:
     """
 
     def __init__(self, turns, *, turn_rate: float | None, equilibration_steps: int,
-                 sample_steps: int, report_interval: int):
+                 sample_steps: int, report_interval: int, mode: str = "ramp"):
         self.segments: list[Segment] = []
         ri = int(report_interval)
+        if mode == "independent":
+            # every turn value from the initial state: no path dependence between points
+            for t in sorted(float(x) for x in turns):
+                ramp = 0 if turn_rate is None else int(math.ceil(abs(t) / turn_rate))
+                ramp = int(math.ceil(ramp / ri)) * ri
+                self.segments.append(Segment(len(self.segments), None, 0.0, t, ramp,
+                                             int(equilibration_steps),
+                                             (int(sample_steps) // ri) * ri))
+            return
+        if mode != "ramp":
+            raise ValueError(f"schedule mode must be 'ramp' or 'independent', got {mode!r}")
         brs = branches(turns)
         for k, br in enumerate(brs):
             if not br:

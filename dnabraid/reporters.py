@@ -23,7 +23,6 @@ import os
 
 import numpy as np
 
-
 __all__ = ["PointWriter", "combine", "read_point", "MIN_N_EFF", "mean_sem_entry"]
 
 #: An autocorrelation-corrected SEM is trusted when the run holds this many correlation times.

@@ -68,7 +68,8 @@ def run_schedule(model, engine: Engine, schedule, observables, out: str, *, ctx:
     os.makedirs(ckdir, exist_ok=True)
     init = os.path.join(ckdir, "initial.chk")
     if not os.path.exists(init):
-        engine.minimise()
+        if ctx.get("minimise", True):
+            engine.minimise()
         engine.save_checkpoint(init)
     sample_cols = {k: v for ob in observables if ob.every == "sample"
                    for k, v in ob.columns.items()}

@@ -2,7 +2,7 @@
 
 A sweep spec is a TOML file (or a dict of the same shape)::
 
-    scene = "braid"                 # built-in name or path to a scene TOML
+    scene = "braid"                 # a registered scene name or a path to a scene TOML
     out = "runs/salt_sweep"         # optional (default runs/<spec file stem>)
     [fixed]                         # optional: keys set on every point
     steps = 20000
@@ -10,10 +10,11 @@ A sweep spec is a TOML file (or a dict of the same shape)::
     salt_mM = [10, 150, 1000]
     force_pN = [1, 2]
 
-Every grid point is validated with :func:`dnabraid.scene.make_scene` before anything runs
-(a bad key or value fails the whole sweep with the scene's message), then run by
-:func:`dnabraid.runner.run_scene` into ``<out>/<point name>`` where the name is built from
-the point's values (``salt_mM=10__force_pN=1``). Points run in local processes
+Any scene of :data:`dnabraid.scenes.SCENES` can be swept. Every grid point is validated
+with :func:`dnabraid.scenes.make_scene` before anything runs (a bad key or value fails the
+whole sweep with the scene's message), then run by its scene's ``run`` into
+``<out>/<point name>`` where the name is built from the point's values
+(``salt_mM=10__force_pN=1``). Points run in local processes
 (:class:`concurrent.futures.ProcessPoolExecutor`, one per usable core, each pinned to one
 core with one OpenMM thread) or, given a scheduler address or a ``dask.distributed.Client``,
 on a Dask cluster.
@@ -21,8 +22,10 @@ on a Dask cluster.
 Sweeps are idempotent: a point whose ``summary.json`` exists is not run again, an
 interrupted point resumes from its checkpoints, and a failed point is recorded with its
 error in ``sweep_status.json`` while the others go on. The results are gathered into
-``results.csv`` (one row per point and turn value, units in the headers) and one figure,
-``sweep.png``.
+``results.csv``: the grid keys, then the result columns the scene declares
+(``row_columns``: for the tweezer scenes one row per turn value with extension, torque and
+catenation; for the knot scene one row per point with loop radius, braid length and wave
+number beside the theory), then ``status, error, point``; and one figure, ``sweep.png``.
 """
 
 from __future__ import annotations
@@ -35,20 +38,14 @@ import json
 import logging
 import math
 import os
-import sys
 import time
 import traceback
 import warnings
 from collections.abc import Callable
 from typing import Any
 
-if sys.version_info >= (3, 11):
-    import tomllib
-else:  # pragma: no cover
-    import tomli as tomllib
-
-from . import scene as scn
-from .scene import SceneError
+from . import rundir, tomlio
+from .scenes import SCENES, Scene, SceneError, make_scene, scene_class
 
 log = logging.getLogger(__name__)
 
@@ -60,7 +57,10 @@ __all__ = [
     "load_spec",
     "run_sweep",
     "gather",
+    "format_table",
     "sweep_plot",
+    "asymmetry",
+    "handedness_across_seeds",
     "analyse_sweep",
     "usable_cores",
 ]
@@ -70,6 +70,8 @@ RESULTS_FILE = "results.csv"
 FIGURE_FILE = "sweep.png"
 SPEC_FILE = "sweep.toml"
 _SPEC_KEYS = {"scene", "out", "fixed", "grid"}
+#: Columns every results.csv row ends with (after the grid keys and the scene's columns).
+STATUS_COLUMNS = ("status", "error", "point")
 
 
 class SweepError(SceneError):
@@ -111,7 +113,7 @@ class SweepPoint:
 
     name: str
     values: dict
-    scene: scn.Scene
+    scene: Scene
 
     @property
     def scene_toml(self) -> str:
@@ -131,13 +133,38 @@ class SweepSpec:
     out: str
     points: tuple
 
+    @property
+    def row_columns(self) -> list[str]:
+        """The result columns of this sweep's scene that are not grid keys."""
+        cols = type(self.points[0].scene).row_columns if self.points else ()
+        return [c for c in cols if c not in self.grid]
+
+    @property
+    def columns(self) -> list[str]:
+        """The header of ``results.csv``: grid keys, the scene's columns, status columns."""
+        return list(self.grid) + self.row_columns + list(STATUS_COLUMNS)
+
     def to_toml(self) -> str:
-        lines = [f"scene = {scn._toml_value(self.scene)}", f"out = {scn._toml_value(self.out)}",
-                 "", "[fixed]"]
-        lines += [f"{k} = {scn._toml_value(v)}" for k, v in self.fixed.items()]
+        v = tomlio.value
+        lines = [f"scene = {v(self.scene)}", f"out = {v(self.out)}", "", "[fixed]"]
+        lines += [f"{k} = {v(x)}" for k, x in self.fixed.items()]
         lines += ["", "[grid]"]
-        lines += [f"{k} = {scn._toml_value(list(v))}" for k, v in self.grid.items()]
+        lines += [f"{k} = {v(list(x))}" for k, x in self.grid.items()]
         return "\n".join(lines) + "\n"
+
+
+def _base_class(base: str) -> type[Scene]:
+    """The scene class of a sweep's base (a registered name or a scene TOML file)."""
+    if base in SCENES:
+        return SCENES[base]
+    try:
+        name = tomlio.load(base).get("scene", "braid")
+    except tomlio.TOMLDecodeError as exc:
+        raise SweepError(f"sweep scene file {base!r} is not valid TOML: {exc}") from exc
+    try:
+        return scene_class(name)
+    except SceneError as exc:
+        raise SweepError(f"sweep scene file {base!r}: {exc}") from exc
 
 
 def load_spec(spec: str | os.PathLike | dict, *, out: str | None = None) -> SweepSpec:
@@ -156,8 +183,8 @@ def load_spec(spec: str | os.PathLike | dict, *, out: str | None = None) -> Swee
     ------
     SweepError
         Unknown spec key, missing or empty grid, a grid key also in ``fixed``, repeated
-        grid values, or a grid point whose scene does not validate (the SceneError
-        message is included).
+        grid values, a list-valued key (e.g. ``turns``) given plain values in the grid, or
+        a grid point whose scene does not validate (the SceneError message is included).
     FileNotFoundError
         The spec file or the scene file does not exist.
     """
@@ -168,11 +195,10 @@ def load_spec(spec: str | os.PathLike | dict, *, out: str | None = None) -> Swee
         path = os.fspath(spec)
         if not os.path.isfile(path):
             raise FileNotFoundError(f"sweep spec {path!r} does not exist")
-        with open(path, "rb") as fh:
-            try:
-                data = tomllib.load(fh)
-            except tomllib.TOMLDecodeError as exc:
-                raise SweepError(f"sweep spec {path!r} is not valid TOML: {exc}") from exc
+        try:
+            data = tomlio.load(path)
+        except tomlio.TOMLDecodeError as exc:
+            raise SweepError(f"sweep spec {path!r} is not valid TOML: {exc}") from exc
         base_dir = os.path.dirname(os.path.abspath(path))
         stem = os.path.splitext(os.path.basename(path))[0]
     unknown = sorted(set(data) - _SPEC_KEYS)
@@ -181,14 +207,15 @@ def load_spec(spec: str | os.PathLike | dict, *, out: str | None = None) -> Swee
                          "scene, out, [fixed], [grid] (scene keys go under [fixed] or [grid])")
     base = data.get("scene", "braid")
     if not isinstance(base, str):
-        raise SweepError(f"scene: expected a built-in scene name or a path, got {base!r}")
-    if base not in scn.BUILTIN:
+        raise SweepError(f"scene: expected a registered scene name or a path, got {base!r}")
+    if base not in SCENES:
         cand = base if os.path.isabs(base) else os.path.join(base_dir, base)
         if not os.path.isfile(cand):
             raise FileNotFoundError(f"sweep scene {base!r} is neither a built-in scene ("
-                                    + ", ".join(scn.BUILTIN) + f") nor a file ({cand} "
+                                    + ", ".join(SCENES) + f") nor a file ({cand} "
                                     "does not exist)")
         base = cand
+    infos = _base_class(base).keys()
     fixed = data.get("fixed", {}) or {}
     grid = data.get("grid")
     if not isinstance(fixed, dict):
@@ -200,9 +227,12 @@ def load_spec(spec: str | os.PathLike | dict, *, out: str | None = None) -> Swee
     for k, vals in grid.items():
         if not isinstance(vals, (list, tuple)) or len(vals) == 0:
             raise SweepError(f"grid key {k!r}: expected a non-empty list of values, got {vals!r}")
-        if k == "turns" and not all(isinstance(v, (list, tuple)) for v in vals):
-            raise SweepError("grid key 'turns': each value is a list of turn values, "
-                             "e.g. turns = [[0, 1, 2], [0, -1, -2]]")
+        info = infos.get(k)
+        if (info is not None and info.kind == "floats"
+                and not all(isinstance(v, (list, tuple)) for v in vals)):
+            unit = f" ({info.unit})" if info.unit else ""
+            raise SweepError(f"grid key {k!r}: each value is a list, since {k} takes a list"
+                             f"{unit}; e.g. {k} = [[0, 1, 2], [0, -1, -2]]")
         names = [_fmt_value(v) for v in vals]
         if len(set(names)) != len(names):
             raise SweepError(f"grid key {k!r}: repeated values {list(vals)!r}")
@@ -219,7 +249,7 @@ def load_spec(spec: str | os.PathLike | dict, *, out: str | None = None) -> Swee
         overrides = {**fixed, **{k: (list(v) if isinstance(v, tuple) else v)
                                  for k, v in values.items()}}
         try:
-            s = scn.make_scene(base, overrides)
+            s = make_scene(base, overrides)
         except SceneError as exc:
             raise SweepError(f"grid point {name}: {exc}") from exc
         points.append(SweepPoint(name, values, s))
@@ -242,7 +272,7 @@ def usable_cores() -> list[int]:
 
 
 def _pin(slot: int | None) -> None:
-    """Pin this process to core ``slot`` (modulo the usable cores); see cli._pin_to_one_core."""
+    """Pin this process to core ``slot`` (modulo the usable cores); cf. engine.pin_to_one_core."""
     if slot is None:
         return
     try:
@@ -282,11 +312,9 @@ def _run_point(name: str, scene_toml: str, out_dir: str, platform: str = "CPU",
             _pin(_WORKER_CORE)
     rec: dict[str, Any] = {"name": name, "out": out_dir, "status": "done", "error": None}
     try:
-        from .runner import run_scene
-
-        data = tomllib.loads(scene_toml)
-        s = scn.make_scene(data.pop("scene"), data)
-        run_scene(s, out_dir, platform=platform, threads=1 if platform == "CPU" else None)
+        data = tomlio.loads(scene_toml)
+        s = make_scene(data.pop("scene"), data)
+        s.run(out_dir, platform=platform, threads=1 if platform == "CPU" else None)
     except BaseException as exc:  # noqa: BLE001 - recorded, the sweep goes on
         if isinstance(exc, KeyboardInterrupt):
             raise
@@ -338,10 +366,7 @@ class SweepResult:
 
 
 def _write_json(path: str, obj) -> None:
-    tmp = path + ".tmp"
-    with open(tmp, "w") as fh:
-        json.dump(obj, fh, indent=2, default=str)
-    os.replace(tmp, path)
+    rundir.atomic_write_text(path, json.dumps(obj, indent=2, default=str))
 
 
 def _point_dir(spec: SweepSpec, p: SweepPoint) -> str:
@@ -389,8 +414,7 @@ def run_sweep(spec: SweepSpec | str | os.PathLike | dict, *, out: str | None = N
     elif out:
         spec = dataclasses.replace(spec, out=out)
     os.makedirs(spec.out, exist_ok=True)
-    with open(os.path.join(spec.out, SPEC_FILE), "w") as fh:
-        fh.write(spec.to_toml())
+    rundir.atomic_write_text(os.path.join(spec.out, SPEC_FILE), spec.to_toml())
     status_path = os.path.join(spec.out, STATUS_FILE)
     status: dict = {}
     for p in spec.points:
@@ -502,11 +526,6 @@ def _run_dask(spec, todo, scheduler, platform, done) -> None:
 # ---------------------------------------------------------------------------------------
 # gathering
 # ---------------------------------------------------------------------------------------
-_OBS = [("extension_nm", "extension_nm", "extension_sem_nm"),
-        ("torque_pN_nm", "torque_pN_nm", "torque_sem_pN_nm"),
-        ("catenation", "catenation", "catenation_sem")]
-
-
 def _cell(v):
     if v is None:
         return ""
@@ -517,14 +536,28 @@ def _cell(v):
     return v
 
 
+def _write_csv(path: str, cols: list[str], rows: list[dict]) -> None:
+    tmp = path + ".tmp"
+    with open(tmp, "w", newline="") as fh:
+        w = csv.writer(fh)
+        w.writerow(cols)
+        for r in rows:
+            w.writerow([_cell(r.get(c)) for c in cols])
+    os.replace(tmp, path)
+
+
 def gather(spec: SweepSpec) -> list[dict]:
     """Collect every point's summary into rows and write ``results.csv``.
 
-    One row per grid point and turn value (grid order, then turns ascending); a point
-    without a summary gets one row with its status (``failed`` with the error, or
-    ``pending``). Columns: the grid keys (units are in the key names), ``turns``,
-    ``extension_nm, extension_sem_nm, torque_pN_nm, torque_sem_pN_nm, catenation,
-    catenation_sem, n_samples, status, error, point``.
+    The rows of a finished point are its scene's :meth:`~dnabraid.scenes.base.Scene.rows`
+    of its ``summary.json``, in grid order; a point without a summary gets one row with
+    its status (``failed`` with the error, or ``pending``) and empty result columns.
+    Columns (:attr:`SweepSpec.columns`): the grid keys (units are in the key names), the
+    scene's ``row_columns`` (for the tweezer scenes ``turns, extension_nm,
+    extension_sem_nm, torque_pN_nm, torque_sem_pN_nm, catenation, catenation_sem,
+    n_samples``, one row per turn value; for the knot scene the measured and theoretical
+    loop radius, braid length and wave number, one row per point), then ``status, error,
+    point``. A scene column that is also a grid key (e.g. ``turns``) takes the row's value.
     """
     status_path = os.path.join(spec.out, STATUS_FILE)
     status = {}
@@ -532,6 +565,7 @@ def gather(spec: SweepSpec) -> list[dict]:
         with open(status_path) as fh:
             status = json.load(fh).get("points", {})
     keys = list(spec.grid)
+    value_cols = spec.row_columns
     rows = []
     for p in spec.points:
         base = {k: p.values[k] for k in keys}
@@ -539,90 +573,106 @@ def gather(spec: SweepSpec) -> list[dict]:
         if os.path.isfile(summ):
             with open(summ) as fh:
                 summary = json.load(fh)
-            for pt in summary["points"]:
-                row = dict(base, turns=pt["turns"])
-                for key, mcol, scol in _OBS:
-                    row[mcol] = pt[key]["mean"]
-                    row[scol] = pt[key]["sem"]
-                row.update(n_samples=pt["n_samples"], status="done", error="", point=p.name)
-                rows.append(row)
+            for r in p.scene.rows(summary):
+                rows.append({**base, **r, "status": "done", "error": "", "point": p.name})
         else:
             st = status.get(p.name, {})
             err = st.get("error") or {}
-            row = dict(base, turns=None)
-            for _, mcol, scol in _OBS:
-                row[mcol] = row[scol] = None
-            row.update(n_samples=None, status=st.get("status", "pending"),
+            row = dict(base)
+            row.update({c: None for c in value_cols})
+            row.update(status=st.get("status", "pending"),
                        error=f"{err['type']}: {err['message']}" if err else "", point=p.name)
             rows.append(row)
-    cols = keys + ["turns"] + [c for _, m, s in _OBS for c in (m, s)] + [
-        "n_samples", "status", "error", "point"]
-    path = os.path.join(spec.out, RESULTS_FILE)
-    tmp = path + ".tmp"
-    with open(tmp, "w", newline="") as fh:
-        w = csv.writer(fh)
-        w.writerow(cols)
-        for r in rows:
-            w.writerow([_cell(r[c]) for c in cols])
-    os.replace(tmp, path)
+    _write_csv(os.path.join(spec.out, RESULTS_FILE), spec.columns, rows)
     return rows
 
 
+def _sem_of(col: str, cols: list[str]) -> str | None:
+    """The standard-error column that goes with ``col`` (``extension_nm`` ->
+    ``extension_sem_nm``, ``catenation`` -> ``catenation_sem``), if the table has one."""
+    for c in cols:
+        if c != col and "_sem" in c and c.replace("_sem", "", 1) == col:
+            return c
+    return None
+
+
+def _is_number(v) -> bool:
+    return isinstance(v, (int, float)) and not isinstance(v, bool)
+
+
+def _fmt_cell(v) -> str:
+    if v is None or (isinstance(v, float) and math.isnan(v)):
+        return "-"
+    if isinstance(v, float):
+        return f"{v:.4g}"
+    return _fmt_value(v)
+
+
+def _fmt_mean_sem(m, s) -> str:
+    if m is None or (isinstance(m, float) and math.isnan(m)):
+        return "-"
+    if s is None or not math.isfinite(s):
+        return f"{m:.4g}"
+    d = 3 if s <= 0 else max(0, min(3, 1 - math.floor(math.log10(s))))
+    return f"{m:.{d}f} +- {s:.{d}f}"
+
+
 def format_table(rows: list[dict], keys: list[str]) -> str:
-    """Fixed-width text table of gathered rows (for the CLI)."""
-    cols = keys + ["turns", "extension_nm", "torque_pN_nm", "catenation", "status"]
-    head = [*keys, "turns", "extension_nm", "torque_pN_nm", "catenation", "status"]
+    """Fixed-width text table of gathered rows (the CLI prints it).
 
-    def ms(r, m, s, p):
-        if r[m] is None:
-            return "-"
-        return f"{r[m]:.{p}f} +- {r[s]:.{p}f}"
-
-    lines = []
-    widths = [max(len(h), 8) for h in head]
-    widths[len(keys) + 1:len(keys) + 4] = [20, 20, 18]
-    lines.append(" ".join(h.rjust(w) for h, w in zip(head, widths)))
+    Columns: the grid keys, then the scene's result columns as they appear in the rows,
+    each mean with its standard error (``x +- sem``) where the scene gives one, then the
+    status. When the rows hold extension at +n and -n turns, the handedness asymmetry
+    z(+n) - z(-n) of each point follows (:func:`asymmetry`).
+    """
+    if not rows:
+        return "(no points)"
+    skip = set(keys) | set(STATUS_COLUMNS)
+    cols = [c for c in rows[0] if c not in skip]
+    sems = {c: _sem_of(c, cols) for c in cols}
+    shown = [c for c in cols if c not in set(sems.values())]
+    head = [*keys, *shown, "status"]
+    table = []
     for r in rows:
         cells = [_fmt_value(r[k]) for k in keys]
-        cells.append("-" if r["turns"] is None else f"{r['turns']:g}")
-        cells.append(ms(r, "extension_nm", "extension_sem_nm", 1))
-        cells.append(ms(r, "torque_pN_nm", "torque_sem_pN_nm", 1))
-        cells.append(ms(r, "catenation", "catenation_sem", 3))
+        for c in shown:
+            s = sems[c]
+            cells.append(_fmt_mean_sem(r.get(c), r.get(s)) if s else _fmt_cell(r.get(c)))
         cells.append(r["status"] + (f" ({r['error']})" if r["error"] else ""))
-        lines.append(" ".join(c.rjust(w) for c, w in zip(cells, widths)))
-    del cols
+        table.append(cells)
+    widths = [max(8, len(h), *(len(t[i]) for t in table[:200] if i < len(head) - 1))
+              for i, h in enumerate(head)]
+    lines = [" ".join(h.rjust(w) for h, w in zip(head, widths))]
+    lines += [" ".join(c.rjust(w) for c, w in zip(t, widths)) for t in table]
+    asym = asymmetry(rows, keys)
+    if asym:
+        lines += ["", "handedness asymmetry z(+n) - z(-n) at the largest n with both signs:"]
+        lines += [f"  {a['point']:<40} n = {a['n']:g}: "
+                  f"{_fmt_mean_sem(a['asymmetry_nm'], a['asymmetry_sem_nm'])} nm" for a in asym]
     return "\n".join(lines)
 
 
-def quick_braid_fixed(*, turns: int, steps: int, seed: int, length_nm: float = 90.0,
-                      **keys) -> dict:
-    """The ``[fixed]`` table of the small braid sweeps in ``workflows/``.
-
-    Turns -N..N, 3 nm beads (fine enough up to 1 M salt), equilibration steps/5 unless
-    given, a frame every tenth of the sampling; ``keys`` add or override flat scene keys
-    (``None`` drops a key, e.g. one that the sweep's grid varies).
-    """
-    fixed = {"length_nm": length_nm, "bead_spacing_nm": 3.0,
-             "turns": list(range(-turns, turns + 1)), "steps": steps,
-             "equilibration_steps": steps // 5, "turn_rate": 1e-4, "seed": seed,
-             "frame_interval": max(100, steps // 10 // 100 * 100)}
-    fixed.update(keys)
-    return {k: v for k, v in fixed.items() if v is not None}
+# ---------------------------------------------------------------------------------------
+# handedness analysis (tweezer rows: turns and extension)
+# ---------------------------------------------------------------------------------------
+def _tweezer_rows(rows: list[dict]) -> list[dict]:
+    return [r for r in rows if r.get("status") == "done"
+            and r.get("turns") is not None and r.get("extension_nm") is not None]
 
 
 def asymmetry(rows: list[dict], keys: list[str]) -> list[dict]:
     """Handedness asymmetry z(+n) - z(-n) per grid point, for the largest n with both signs.
 
     Returns one dict per point with ``n``, ``asymmetry_nm``, ``asymmetry_sem_nm`` and the
-    grid values; points without a +n/-n pair are left out.
+    grid values; points without a +n/-n pair (or rows without ``turns`` and
+    ``extension_nm``, e.g. of the knot scene) are left out.
     """
     by_point: dict = {}
-    for r in rows:
-        if r["status"] == "done" and r["extension_nm"] is not None:
-            by_point.setdefault(r["point"], []).append(r)
+    for r in _tweezer_rows(rows):
+        by_point.setdefault(r["point"], []).append(r)
     out = []
     for name, rs in by_point.items():
-        z = {r["turns"]: (r["extension_nm"], r["extension_sem_nm"]) for r in rs}
+        z = {r["turns"]: (r["extension_nm"], r.get("extension_sem_nm")) for r in rs}
         pairs = [n for n in z if n > 0 and -n in z]
         if not pairs:
             continue
@@ -633,66 +683,179 @@ def asymmetry(rows: list[dict], keys: list[str]) -> list[dict]:
     return out
 
 
-def sweep_plot(spec: SweepSpec, rows: list[dict], path: str) -> str | None:
-    """One figure per sweep: extension against turns per grid point; and, if the sweep
-    varies ``alpha`` or holds +n and -n turn values, the asymmetry z(+n) - z(-n) against
-    the swept key (``alpha`` if swept, else the first numeric grid key)."""
-    import matplotlib
+def handedness_across_seeds(rows: list[dict], turns: float, *, group: str = "alpha",
+                            seed: str = "seed") -> list[dict]:
+    """Handedness of thermal braids with its error from independent seeds.
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    Within one run the autocorrelation-corrected SEM of the trap torque is ~1.6x too small
+    (a slow component escapes the window), so the error of the handedness comes from a
+    sweep over ``seed``: per seed the torque sum Gamma(+n) + Gamma(-n) and the extension
+    difference z(+n) - z(-n), then their mean and standard error across seeds. Without a
+    chiral term both vanish by mirror symmetry; alpha > 0 favours right-handed braids
+    (n > 0), so less torque holds +n (zero-temperature continuum: Gamma(+n) + Gamma(-n)
+    ~ -2 r alpha, :func:`dnabraid.crosscheck.compare_tweezer`).
+
+    Parameters
+    ----------
+    rows : list of dict
+        Gathered sweep rows (:func:`gather`) of a tweezer scene whose grid holds ``seed``.
+    turns : float
+        n (> 0); each seed must have run both +n and -n.
+    group : str
+        The grid key to group by (default ``alpha``).
+    seed : str
+        The grid key of the seeds.
+
+    Returns
+    -------
+    list of dict
+        One per value of ``group`` (ascending): ``group``, ``seeds`` (count),
+        ``torque_sum_pN_nm``, ``torque_sum_se_pN_nm``, ``t`` (mean / SE),
+        ``delta_z_nm``, ``delta_z_se_nm``, ``torque_sums`` (per seed). Means and errors are
+        None with fewer than two seeds.
+    """
+    n = abs(float(turns))
+    by: dict = {}
+    for r in _tweezer_rows(rows):
+        if r.get("torque_pN_nm") is None:
+            continue
+        key = (float(r[group]), r[seed])
+        by.setdefault(key, {})[float(r["turns"])] = (float(r["torque_pN_nm"]),
+                                                     float(r["extension_nm"]))
+    out = []
+    for g in sorted({k[0] for k in by}):
+        sums, dz = [], []
+        for (gg, _s), pts in sorted(by.items(), key=lambda kv: (kv[0][0], str(kv[0][1]))):
+            if gg == g and n in pts and -n in pts:
+                sums.append(pts[n][0] + pts[-n][0])
+                dz.append(pts[n][1] - pts[-n][1])
+        rec = {"group": g, "seeds": len(sums), "torque_sums": sums, "torque_sum_pN_nm": None,
+               "torque_sum_se_pN_nm": None, "t": None, "delta_z_nm": None,
+               "delta_z_se_nm": None}
+        if len(sums) >= 2:
+            m, sd = _mean_se(sums)
+            mz, sdz = _mean_se(dz)
+            rec.update(torque_sum_pN_nm=m, torque_sum_se_pN_nm=sd,
+                       t=m / sd if sd > 0 else math.copysign(math.inf, m) if m else 0.0,
+                       delta_z_nm=mz, delta_z_se_nm=sdz)
+        out.append(rec)
+    return out
+
+
+def _mean_se(x: list[float]) -> tuple[float, float]:
+    m = sum(x) / len(x)
+    var = sum((v - m) ** 2 for v in x) / (len(x) - 1)
+    return m, math.sqrt(var / len(x))
+
+
+# ---------------------------------------------------------------------------------------
+# the figure
+# ---------------------------------------------------------------------------------------
+def _numeric_grid_keys(spec: SweepSpec) -> list[str]:
+    return [k for k in spec.grid if all(_is_number(v) for v in spec.grid[k])]
+
+
+def sweep_plot(spec: SweepSpec, rows: list[dict], path: str) -> str | None:
+    """One figure per sweep, from the scene's result columns.
+
+    A scene with several rows per point (tweezer scenes: one per turn value) gives one
+    curve per point of its second result column against its first (extension against
+    turns); a scene with one row per point (the knot scene) gives its first varying result
+    column against the first numeric grid key, one curve per value of the other keys.
+    Error bars come from the matching ``_sem`` column. If the rows hold +n and -n turns and
+    the sweep varies ``alpha`` (or has more than one point), a second panel shows the
+    asymmetry z(+n) - z(-n) against the swept key (``alpha`` if swept, else the first
+    numeric grid key). Returns the path, or None when no point finished.
+    """
+    from matplotlib.figure import Figure
 
     keys = list(spec.grid)
     done = [r for r in rows if r["status"] == "done"]
     if not done:
         return None
+    cols = spec.row_columns
+    sem_cols = {s for c in cols if (s := _sem_of(c, cols))}
+    numeric = [c for c in cols if c not in sem_cols
+               and all(_is_number(r.get(c)) for r in done)]
+    counts: dict = {}
+    for r in done:
+        counts[r["point"]] = counts.get(r["point"], 0) + 1
+    per_point = max(counts.values()) > 1
+    num_keys = _numeric_grid_keys(spec)
+    if per_point and numeric:
+        xcol = numeric[0]
+    else:
+        xcol = num_keys[0] if num_keys else None
+    ycands = [c for c in numeric if c != xcol]
+    varying = [c for c in ycands if len({r[c] for r in done}) > 1]
+    ycol = (varying or ycands or [None])[0]
+    if ycol is None:
+        return None
     asym = asymmetry(rows, keys)
-    numeric = [k for k in keys if all(isinstance(v, (int, float)) and not isinstance(v, bool)
-                                      for v in spec.grid[k])]
-    xkey = "alpha" if "alpha" in keys else (numeric[0] if numeric else None)
-    show_asym = bool(asym) and xkey is not None and ("alpha" in keys or len(asym) > 1)
+    akey = "alpha" if "alpha" in keys else (num_keys[0] if num_keys else None)
+    show_asym = bool(asym) and akey is not None and ("alpha" in keys or len(asym) > 1)
     ncol = 2 if show_asym else 1
-    fig, axes = plt.subplots(1, ncol, figsize=(5.2 * ncol, 3.9), squeeze=False)
+    fig = Figure(figsize=(5.2 * ncol, 3.9))
+    axes = fig.subplots(1, ncol, squeeze=False)
     ax = axes[0, 0]
-    for i, p in enumerate(spec.points):
-        rs = [r for r in done if r["point"] == p.name]
-        if not rs:
-            continue
-        label = ", ".join(f"{k}={_fmt_value(v)}" for k, v in p.values.items())
-        ax.errorbar([r["turns"] for r in rs], [r["extension_nm"] for r in rs],
-                    yerr=[r["extension_sem_nm"] or 0 for r in rs], fmt="o-", ms=3, capsize=2,
-                    label=label, color=f"C{i % 10}")
-    ax.set_xlabel("bead turns n")
-    ax.set_ylabel("extension (nm)")
-    ax.legend(fontsize=7, frameon=False)
+    ysem = _sem_of(ycol, cols)
+
+    def bars(rs):
+        return [(r.get(ysem) or 0) if ysem else 0 for r in rs]
+
+    if per_point:
+        for i, p in enumerate(spec.points):
+            rs = sorted((r for r in done if r["point"] == p.name), key=lambda r: r[xcol])
+            if not rs:
+                continue
+            label = ", ".join(f"{k}={_fmt_value(v)}" for k, v in p.values.items())
+            ax.errorbar([r[xcol] for r in rs], [r[ycol] for r in rs], yerr=bars(rs), fmt="o-",
+                        ms=3, capsize=2, label=label, color=f"C{i % 10}")
+    else:
+        others = [k for k in keys if k != xcol]
+        groups: dict = {}
+        for r in done:
+            groups.setdefault(tuple(_fmt_value(r[k]) for k in others), []).append(r)
+        for j, (g, rs) in enumerate(groups.items()):
+            if xcol is None:
+                xs = [spec.points.index(next(p for p in spec.points if p.name == r["point"]))
+                      for r in rs]
+            else:
+                rs.sort(key=lambda r: r[xcol])
+                xs = [r[xcol] for r in rs]
+            label = ", ".join(f"{k}={v}" for k, v in zip(others, g)) or None
+            ax.errorbar(xs, [r[ycol] for r in rs], yerr=bars(rs), fmt="o-", ms=3, capsize=2,
+                        label=label, color=f"C{j % 10}")
+    ax.set_xlabel(xcol or "point")
+    ax.set_ylabel(ycol)
+    if ax.get_legend_handles_labels()[1]:
+        ax.legend(fontsize=7, frameon=False)
     if show_asym:
         ax2 = axes[0, 1]
-        others = [k for k in keys if k != xkey]
-        groups: dict = {}
+        others = [k for k in keys if k != akey]
+        agroups: dict = {}
         for a in asym:
-            groups.setdefault(tuple(_fmt_value(a[k]) for k in others), []).append(a)
-        for j, (g, items) in enumerate(groups.items()):
-            items.sort(key=lambda a: a[xkey])
+            agroups.setdefault(tuple(_fmt_value(a[k]) for k in others), []).append(a)
+        for j, (g, items) in enumerate(agroups.items()):
+            items.sort(key=lambda a: a[akey])
             label = ", ".join(f"{k}={v}" for k, v in zip(others, g)) or None
-            ax2.errorbar([a[xkey] for a in items], [a["asymmetry_nm"] for a in items],
+            ax2.errorbar([a[akey] for a in items], [a["asymmetry_nm"] for a in items],
                          yerr=[a["asymmetry_sem_nm"] for a in items], fmt="s-", capsize=2,
                          label=label, color=f"C{j % 10}")
         ax2.axhline(0, color="0.7", lw=0.8)
         ns = sorted({a["n"] for a in asym})
-        ax2.set_xlabel(xkey)
-        xs = [a[xkey] for a in asym]
-        if xkey == "salt_mM" and min(xs) > 0 and max(xs) >= 10 * min(xs):
+        ax2.set_xlabel(akey)
+        xs = [a[akey] for a in asym]
+        if akey == "salt_mM" and min(xs) > 0 and max(xs) >= 10 * min(xs):
             ax2.set_xscale("log")
         ax2.set_ylabel(f"z(+n) - z(-n) (nm), n = {', '.join(f'{n:g}' for n in ns)}")
-        if any(g for g in groups):
+        if any(g for g in agroups):
             ax2.legend(fontsize=7, frameon=False)
-    sc = spec.points[0].scene
-    fig.suptitle(f"sweep {os.path.basename(os.path.normpath(spec.out))}: {sc.scene}, "
-                 f"L = {sc.length_nm:g} nm", fontsize=9)
+    fig.suptitle(f"sweep {os.path.basename(os.path.normpath(spec.out))}: scene "
+                 f"{spec.points[0].scene.name}", fontsize=9)
     fig.tight_layout()
     tmp = path + ".tmp.png"
-    fig.savefig(tmp, dpi=110)
-    plt.close(fig)
+    fig.savefig(tmp, dpi=110, format="png")
     os.replace(tmp, path)
     return path
 
@@ -702,9 +865,9 @@ def sweep_plot(spec: SweepSpec, rows: list[dict], path: str) -> str | None:
 # ---------------------------------------------------------------------------------------
 def analyse_sweep(sweep_dir: str, *, crossing_cutoff_nm: float | None = None,
                   write: bool = True) -> list[dict]:
-    """Analyse every finished point's trajectory with MDAnalysis.
+    """Analyse every finished point's two-strand trajectory with MDAnalysis.
 
-    Opens ``topology.pdb`` + ``trajectory.dcd`` of each point and runs
+    Points without a ``trajectory.dcd`` (the knot scene writes none) are left out. Opens ``topology.pdb`` + ``trajectory.dcd`` of each point and runs
     :class:`~dnabraid.analysis.mda.Extension`, :class:`~dnabraid.analysis.mda.Catenation`
     and :class:`~dnabraid.analysis.mda.CrossingAngles` over its frames; the frames are
     split per turn value with the frame counts in ``summary.json``.
@@ -766,10 +929,5 @@ def analyse_sweep(sweep_dir: str, *, crossing_cutoff_nm: float | None = None,
     if write:
         cols = keys + ["turns", "n_frames", "extension_nm", "catenation", "crossings_per_frame",
                        "mean_abs_crossing_angle_deg", "point"]
-        path = os.path.join(sweep_dir, "trajectory_analysis.csv")
-        with open(path, "w", newline="") as fh:
-            w = csv.writer(fh)
-            w.writerow(cols)
-            for r in rows:
-                w.writerow([_cell(r[c]) for c in cols])
+        _write_csv(os.path.join(sweep_dir, "trajectory_analysis.csv"), cols, rows)
     return rows

@@ -33,6 +33,8 @@ from .base import Scene, SceneError, key
 
 #: Largest number of DNA beads a tweezer scene may have (memory and time stay sane).
 MAX_BEADS = 20000
+#: Most replicas per point; replica r of seed s runs integrator stream s x MAX_REPLICAS + r.
+MAX_REPLICAS = 64
 
 UNITS = {"extension": "nm", "torque": "pN nm (torque the trap applies; > 0 holds n > 0)",
          "catenation": "turns (Gauss linking number, strands closed by vertical rays)",
@@ -82,6 +84,13 @@ class TweezerScene(Scene):
                        "contact length, pN = pN nm/nm; 1 kT/nm = 4.11 pN); 0 = no chiral term; "
                        "'salt' = the estimate at salt_mM from forcefields/chiral.toml; > 0 "
                        "favours right-handed braids (n > 0)")
+
+    replicas: int = key(4, "", "independent replicas per turn value, each from its own start "
+                        "(seed); the error bar is the scatter of their means (Student t)")
+    protocol: str = key("independent", "", "'independent': every turn value starts from the "
+                        "initial state (ramped there from 0), no path dependence; 'ramp': up "
+                        "and down branches through the turn values (hysteresis)")
+    workers: int = key(0, "", "processes running replicas at once; 0 = one per usable core")
 
     #: The trap's global parameter (None: the bead is not turned).
     trap_parameter: ClassVar[str | None] = None
@@ -162,7 +171,13 @@ class TweezerScene(Scene):
         need(self.bead_radius_nm > 0, "bead_radius_nm", "must be > 0")
         need(0 < self.bead_friction_factor <= 1, "bead_friction_factor", "must be in (0, 1]")
         need(0 < self.timestep_safety <= 0.9, "timestep_safety", "must be in (0, 0.9]")
-        need(0 <= self.seed <= MAX_SEED, "seed", f"must be in [0, {MAX_SEED}]")
+        need(0 <= self.seed <= MAX_SEED // MAX_REPLICAS, "seed",
+             f"must be in [0, {MAX_SEED // MAX_REPLICAS}] (replica r runs seed x "
+             f"{MAX_REPLICAS} + r)")
+        need(1 <= self.replicas <= MAX_REPLICAS, "replicas", f"must be in [1, {MAX_REPLICAS}]")
+        need(self.protocol in ("independent", "ramp"), "protocol",
+             "allowed: 'independent', 'ramp'")
+        need(self.workers >= 0, "workers", "must be >= 0 (0 = one per usable core)")
         need(abs(self.alpha) <= 50.0, "alpha",
              "|alpha| must be <= 50 pN (~12 kT/nm; literature estimates are 0.01-1.5 pN, "
              "forcefields/chiral.toml)")
@@ -213,7 +228,8 @@ class TweezerScene(Scene):
         return TurnSchedule(self.turns, turn_rate=getattr(self, "turn_rate", None)
                             if self.trap_parameter else None,
                             equilibration_steps=self.equilibration_steps,
-                            sample_steps=self.steps, report_interval=self.report_interval)
+                            sample_steps=self.steps, report_interval=self.report_interval,
+                            mode=self.protocol)
 
     # -- run -----------------------------------------------------------------------------
     def notes(self, model: Model) -> list[str]:
@@ -222,69 +238,107 @@ class TweezerScene(Scene):
     def units(self) -> dict:
         return dict(UNITS)
 
-    def point_summary(self, samples: dict, frames: dict) -> dict:
-        """Per turn value: mean and SEM of each observable (from the streamed files)."""
-        ms = reporters.mean_sem_entry
-        nan = np.array([np.nan])
-        return {
-            "turns": float(samples["turns"][0]) if len(samples["turns"]) else None,
-            "extension_nm": ms(samples["extension_nm"]),
-            "torque_pN_nm": ms(samples.get("torque_pN_nm", nan)),
-            "catenation": ms(frames.get("catenation", nan)),
-            "bead_angle_turns": ms(samples.get("bead_angle_turns", nan)),
-            "n_samples": int(len(samples["step"])),
-            "n_frames": int(len(frames["step"])),
-        }
+    #: Observables whose convergence decides a point's verdict.
+    verdict_observables: ClassVar[tuple] = ("extension_nm", "torque_pN_nm")
+    def replica_seed(self, r: int) -> int:
+        return self.seed * MAX_REPLICAS + r
+
+    def summarise(self, series: list) -> dict:
+        """Mean and error of one observable from its per-replica series."""
+        series = [np.asarray(x, float) for x in series]
+        if not series or any(x.size == 0 or not np.all(np.isfinite(x)) for x in series):
+            return {"mean": None, "sem": None}
+        if len(series) == 1:
+            d = reporters.mean_sem_entry(series[0])
+            d.update(converged=False, reason="one replica: no between-replica check",
+                     n_replicas=1)
+            return d
+        from ..analysis.convergence import MIN_ESS_RELAXED, RHAT_MAX_RELAXED, replica_summary
+
+        r = replica_summary(series, rhat_max=RHAT_MAX_RELAXED, min_ess=MIN_ESS_RELAXED)
+        return {"mean": float(r["mean"]), "sem": float(r["sem"]),
+                "ci_halfwidth": float(r["ci_halfwidth"]), "confidence": r["confidence"],
+                "n_replicas": int(r["n_replicas"]), "sem_within": float(r["sem_within"]),
+                "rhat": float(r["rhat"]), "ess": float(r["ess"]),
+                "equilibration_samples": [int(x) for x in r["equilibration_samples"]],
+                "replica_means": [float(x) for x in r["replica_means"]],
+                "converged": bool(r["converged"]), "reason": r["reason"]}
+
+    def point_summary(self, reps: list) -> dict:
+        """Per turn value, from the replicas' (samples, frames) of that point."""
+        s0 = reps[0][0]
+        pt = {"turns": float(s0["turns"][0]) if len(s0["turns"]) else None}
+        cols = [c for c in s0 if c not in ("turns", "step", "time_ns")]
+        for c in cols:
+            pt[c] = self.summarise([s[c] for s, _ in reps])
+        fcols = [c for c in reps[0][1] if c not in ("turns", "frame", "step", "time_ns")]
+        for c in fcols:
+            pt[c] = self.summarise([f[c] for _, f in reps])
+        for c in ("extension_nm", "torque_pN_nm", "catenation", "bead_angle_turns"):
+            pt.setdefault(c, {"mean": None, "sem": None})
+        pt["n_samples"] = int(sum(len(s["step"]) for s, _ in reps))
+        pt["n_frames"] = int(sum(len(f["step"]) for _, f in reps))
+        pt["n_replicas"] = len(reps)
+        verdict = [(c, pt[c]) for c in self.verdict_observables if pt[c]["mean"] is not None]
+        pt["converged"] = all(v.get("converged", False) for _, v in verdict)
+        pt["convergence_reason"] = "; ".join(f"{c}: {v.get('reason', '')}" for c, v in verdict
+                                             if not v.get("converged", False)) or "ok"
+        pt["effective_sample_size"] = {c: v.get("ess") for c, v in verdict}
+        return pt
 
     def run(self, out: str, *, platform: str = "CPU", threads: int | None = None,
             progress_factory=None) -> dict:
         t0 = time.perf_counter()
         model = self.build()
-        engine = Engine(model, platform=platform, seed=self.seed, threads=threads)
-        resumed = rundir.prepare_out_dir(self, out)
+        rundir.prepare_out_dir(self, out)
         sched = self.schedule()
-        total = sched.total_steps
-        bar = progress_factory(total) if progress_factory else None
+        R = self.replicas
+        total = sched.total_steps * R
         obs = self.observables(model)
-        ctx = {"trap_parameter": self.trap_parameter,
-               "trap_stiffness": getattr(self, "trap_stiffness_pN_nm", None),
-               "turn_rate": getattr(self, "turn_rate", None)}
+        bar = progress_factory(total) if progress_factory else None
+        jobs = [(self.to_dict(), r, os.path.join(out, "replicas", f"r{r:02d}"), platform,
+                 threads) for r in range(R)]
+        workers = self.workers or _usable_cores()
+        workers = max(1, min(workers, R)) if platform == "CPU" else 1
         try:
-            dirs = run_schedule(model, engine, sched, obs, out, ctx=ctx,
-                                progress=bar.update if bar else None)
+            results = _run_jobs(jobs, workers, bar)
         finally:
             if bar:
                 bar.close()
         wall = time.perf_counter() - t0
+        resumed = any(r["resumed"] for r in results)
         p = model.params
         dt_ns = model.timestep.time_step_ns
         rundir.write_topology(os.path.join(out, "topology.pdb"), model.topology, model.positions)
         sample_cols = {k: v for ob in obs if ob.every == "sample" for k, v in ob.columns.items()}
         frame_cols = {k: v for ob in obs if ob.every == "frame" for k, v in ob.columns.items()}
-        reporters.combine(out, dirs, model.topology, dt_ns * 1e3, self.frame_interval,
-                          sample_cols, frame_cols)
-        points = [self.point_summary(*reporters.read_point(d)) for d in dirs]
+        reporters.combine(out, [d for r in results for d in r["dirs"]], model.topology,
+                          dt_ns * 1e3, self.frame_interval, sample_cols, frame_cols)
+        points = []
+        for k in range(len(sched)):
+            points.append(self.point_summary([reporters.read_point(r["dirs"][k])
+                                              for r in results]))
         points.sort(key=lambda pt: pt["turns"])
         notes = self.notes(model)
         if resumed:
             notes.append("resumed from checkpoints; wall_time_s counts this invocation only")
-        short = [pt["turns"] for pt in points if pt["extension_nm"].get("sem_reliable") is False]
-        if short:
-            notes.append(
-                f"sampling at turns {short} spans fewer than {reporters.MIN_N_EFF} correlation "
-                "times of the extension: its SEM is a rough estimate (likely too small); raise "
-                "`steps`")
+        bad = [pt["turns"] for pt in points if not pt["converged"]]
+        if bad:
+            notes.append(f"NOT CONVERGED at turns {bad}: the replicas disagree more than their "
+                         "sampling allows or sampled too few independent configurations "
+                         "(see convergence_reason per point); raise `steps` or `replicas`")
         n_part = model.system.getNumParticles()
         summary = rundir.Summary(
-            scene=self.to_dict(), wall_time_s=wall, platform=engine.platform,
+            scene=self.to_dict(), wall_time_s=wall, platform=platform,
             time_step_ps=dt_ns * 1e3, time_step_reason=model.timestep.reason,
             relaxation_rates_per_ns=model.timestep.rates_per_ns, total_steps=total,
             steps_per_second=total / wall if not resumed else None,
-            ns_per_bead_per_step=(wall / total / n_part * 1e9) if not resumed else None,
+            ns_per_bead_per_step=(wall / total / n_part * 1e9 * workers) if not resumed
+            else None,
             n_particles=n_part, forces=sorted(model.forces),
             effective_diameter_nm=p["diameter_nm"], bending_kappa_kT=p["kappa_kT"],
             units=self.units(), notes=notes, versions=rundir.versions(), points=points,
-            seed=self.seed, integrator_seed=engine.seed)
+            seed=self.seed, integrator_seed=results[0]["integrator_seed"])
         rundir.write_summary(os.path.join(out, "summary.json"), summary)
         from .. import plots
 
@@ -306,8 +360,12 @@ class TweezerScene(Scene):
             return f"{d['mean']:.{p}f} +- {d['sem']:.{p}f}"
 
         for pt in summary["points"]:
+            mark = "" if pt.get("converged", True) else "  NOT CONVERGED"
             print(f"{pt['turns']:>7g} {fmt(pt['extension_nm'], 1):>20} "
-                  f"{fmt(pt['torque_pN_nm'], 1):>20} {fmt(pt['catenation'], 3):>18}", file=file)
+                  f"{fmt(pt['torque_pN_nm'], 1):>20} {fmt(pt['catenation'], 3):>18}{mark}",
+                  file=file)
+        print("+- : standard error of the mean across independent replicas (Student-t 95% "
+              "intervals in summary.json)", file=file)
         print(f"wall time {summary['wall_time_s']:.1f} s on {summary['platform']}; results in "
               f"{out}/", file=file)
 
@@ -343,3 +401,92 @@ def lockup_turns(length_nm: float, diameter_nm: float) -> float:
     locks up at theta = 45 deg (van der Heijden's talk on elastic braids, lock-up of the
     two-ply), n = L sin(theta) / (2 pi r) = L / (sqrt(2) pi d)."""
     return length_nm / (math.sqrt(2.0) * math.pi * diameter_nm)
+
+
+# ------------------------------------------------------------------------------ replicas
+def _usable_cores() -> int:
+    try:
+        return len(os.sched_getaffinity(0))
+    except AttributeError:  # pragma: no cover - not on Linux
+        return os.cpu_count() or 1
+
+
+def _run_replica(scene_dict, r, rdir, platform, threads, progress) -> dict:
+    """Run replica ``r`` of a scene into ``rdir`` (its own Context and seed)."""
+    from . import make_scene
+
+    d = dict(scene_dict)
+    name = d.pop("scene")
+    base = make_scene(name, d)
+    scene = dataclasses.replace(base, seed=base.replica_seed(r))
+    model = scene.build()
+    engine = Engine(model, platform=platform, seed=scene.seed, threads=threads)
+    resumed = os.path.isdir(os.path.join(rdir, "checkpoints"))
+    os.makedirs(rdir, exist_ok=True)
+    ctx = {"trap_parameter": scene.trap_parameter,
+           "trap_stiffness": getattr(scene, "trap_stiffness_pN_nm", None),
+           "turn_rate": getattr(scene, "turn_rate", None),
+           "minimise": not model.extra.get("exact_start", False)}
+    dirs = run_schedule(model, engine, scene.schedule(), scene.observables(model), rdir,
+                        ctx=ctx, progress=progress)
+    return {"dirs": dirs, "integrator_seed": engine.seed, "resumed": resumed}
+
+
+def _worker(args):
+    job, queue = args
+    pin_to_one_core_of(job[1])
+    acc = [0]
+
+    def progress(n):  # batch the messages: one per >= 20000 steps
+        acc[0] += n
+        if acc[0] >= 20000:
+            queue.put(acc[0])
+            acc[0] = 0
+
+    try:
+        res = _run_replica(*job, progress)
+        queue.put(acc[0])
+        return res
+    except Exception as exc:  # hand the failure to the parent intact
+        return {"error": exc}
+
+
+def pin_to_one_core_of(r: int) -> None:
+    """Pin a worker process to one usable core, replica r to core r mod n."""
+    try:
+        cores = sorted(os.sched_getaffinity(0))
+        os.sched_setaffinity(0, {cores[r % len(cores)]})
+    except (AttributeError, OSError):  # pragma: no cover
+        pass
+
+
+def _run_jobs(jobs, workers: int, bar) -> list:
+    """Run replica jobs, ``workers`` processes at a time (serially in-process for 1)."""
+    upd = bar.update if bar else None
+    if workers <= 1:
+        return [_run_replica(*job, upd) for job in jobs]
+    import multiprocessing as mp
+    import queue as _queue
+
+    ctx = mp.get_context("spawn")
+    with ctx.Manager() as mgr:
+        q = mgr.Queue()
+        with ctx.Pool(workers) as pool:
+            res = pool.map_async(_worker, [(job, q) for job in jobs])
+            while not res.ready():
+                try:
+                    n = q.get(timeout=0.5)
+                    if upd:
+                        upd(n)
+                except _queue.Empty:
+                    pass
+            out = res.get()
+            while upd:
+                try:
+                    upd(q.get_nowait())
+                except _queue.Empty:
+                    break
+    for r in out:
+        if "error" in r:
+            raise r["error"]
+    return out

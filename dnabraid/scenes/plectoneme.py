@@ -17,9 +17,8 @@ from typing import ClassVar
 
 import numpy as np
 
-from .. import forcefield, reporters
+from .. import forcefield, units
 from .. import observables as ob
-from .. import units
 from ..forces import pull_force, stretch_force, trap_force
 from ..forces.twist import (
     bead_plane_force,
@@ -178,20 +177,14 @@ class Plectoneme(TweezerScene):
                            "contour from the surface (geometry.twist.find_plectonemes)"})
         return u
 
-    def point_summary(self, samples, frames) -> dict:
-        pt = super().point_summary(samples, frames)
-        ms = reporters.mean_sem_entry
-        tip = frames["plectoneme_tip_nm"]
-        pl = frames["plectonemes"]
-        pt.update({
-            "twist_torque_pN_nm": ms(samples["twist_torque_pN_nm"]),
-            "twist": ms(frames["twist"]), "writhe": ms(frames["writhe"]),
-            "linking": ms(frames["twist"] + frames["writhe"]),
-            "plectonemes": ms(pl),
-            "plectoneme_length_nm": ms(frames["plectoneme_length_nm"]),
-            "plectoneme_fraction": float(np.mean(pl > 0)) if pl.size else None,
-            "plectoneme_tip_nm": float(np.nanmedian(tip)) if np.any(np.isfinite(tip))
-            else None})
+    def point_summary(self, reps: list) -> dict:
+        pt = super().point_summary(reps)
+        pt["linking"] = self.summarise([f["twist"] + f["writhe"] for _, f in reps])
+        pl = np.concatenate([f["plectonemes"] for _, f in reps])
+        tip = np.concatenate([f["plectoneme_tip_nm"] for _, f in reps])
+        pt["plectoneme_fraction"] = float(np.mean(pl > 0)) if pl.size else None
+        pt["plectoneme_tip_nm"] = (float(np.nanmedian(tip)) if np.any(np.isfinite(tip))
+                                   else None)
         return pt
 
     def default_short_run(self) -> dict:

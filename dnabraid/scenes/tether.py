@@ -2,7 +2,8 @@
 force F (force-extension; not turned).
 
 The chain runs from its surface tether (immobile) to the bead attachment, which carries the
-bead's friction and the force. It starts from a draw of the discrete worm-like chain.
+bead's friction and the force. It starts from an exact equilibrium draw of the discrete worm-like chain under the force
+(:meth:`Tether.equilibrium_start`), not minimised.
 ``self_avoidance = false`` and ``surface = false`` leave out the excluded volume and the wall:
 the exact discrete WLC under force (:mod:`dnabraid.continuum.wlc`) is then the same model.
 """
@@ -11,6 +12,8 @@ from __future__ import annotations
 
 import dataclasses
 from typing import ClassVar
+
+import numpy as np
 
 from .. import observables as ob
 from .. import units
@@ -41,8 +44,12 @@ class Tether(TweezerScene):
         d = kit.dna
         zeta_phys = units.stokes_friction(self.bead_radius_nm)
         zeta_attach = max(d.zeta_bead, self.bead_friction_factor * zeta_phys)
-        pos = random_tether(self.n_beads, self.bead_spacing_nm, d.kappa_kT, self.seed,
-                            z_min=0.5 * d.diameter_nm if self.surface else None)
+        pos = self.equilibrium_start(d)
+        if pos is None:
+            pos = random_tether(self.n_beads, self.bead_spacing_nm, d.kappa_kT, self.seed,
+                                z_min=0.5 * d.diameter_nm if self.surface else None)
+        else:
+            kit.extra["exact_start"] = True
         chain = kit.add_chain(pos, "A", last_friction=zeta_attach)
         kit.add_stretch(self.stretch)
         kit.add_bend()
@@ -59,6 +66,34 @@ class Tether(TweezerScene):
                 "zeta_bead_physical_pN_ns_per_nm": zeta_phys,
                 "wall_k_pN_per_nm": d.wall_k if self.surface else 0.0,
                 "n_exclusions": n_excl}
+
+    def equilibrium_start(self, d, tries: int = 64):
+        """An exact draw of the discrete WLC under the force (stretching included;
+        :func:`dnabraid.continuum.wlc.sample_discrete_wlc`), or None.
+
+        Draws that put a bead below the wall or two non-neighbouring beads closer than
+        0.8 d (when they repel) are rejected: the start is then exact for the model without
+        wall and self-avoidance, conditioned on being allowed with them. The run starts from
+        it without minimisation, so no equilibration of the slow stretching modes is needed.
+        """
+        from ..continuum.wlc import sample_discrete_wlc
+
+        n = self.n_beads - 1
+        k = self.stretch_modulus_pN / self.bead_spacing_nm if self.stretch == "bonds" else None
+        draws = sample_discrete_wlc(self.force_pN, n, self.bead_spacing_nm, d.kappa_kT, d.kT,
+                                    stretch_k_pN_per_nm=k, n_samples=tries,
+                                    rng=np.random.default_rng(self.seed))
+        gap = max(1, int(np.ceil(2 ** (1 / 6) * d.diameter_nm / self.bead_spacing_nm + 0.5)))
+        for x in draws:
+            if self.surface and np.any(x[1:, 2] <= 0.5 * d.diameter_nm):
+                continue
+            if self.self_avoidance and n > gap:
+                r = np.linalg.norm(x[:, None, :] - x[None, :, :], axis=-1)
+                iu = np.triu_indices(len(x), k=gap)
+                if np.min(r[iu]) < 0.8 * d.diameter_nm:
+                    continue
+            return x
+        return None
 
     def observables(self, model) -> list:
         return [ob.Extension(model.attachments)]
