@@ -91,7 +91,8 @@ def twisted_run(tmp_path_factory):
     out = tmp_path_factory.mktemp("plect") / "run"
     s = make_scene("plectoneme", {"length_nm": 60.0, "force_pN": 2.0, "turns": [0.0, 1.5],
                                   "steps": 16_000, "equilibration_steps": 4000,
-                                  "turn_rate": 2e-4, "frame_interval": 1000, "seed": 3})
+                                  "turn_rate": 2e-4, "frame_interval": 1000, "seed": 3,
+                                  "replicas": 1})
     return s, str(out), s.run(str(out))
 
 

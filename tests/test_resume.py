@@ -13,7 +13,8 @@ from dnabraid.engine import Engine
 from dnabraid.scenes import make_scene
 
 SHORT = {"length_nm": 60.0, "tether_separation_nm": 20.0, "turns": [-1.0, 0.0, 1.0],
-         "steps": 3000, "equilibration_steps": 500, "frame_interval": 500, "seed": 5}
+         "steps": 3000, "equilibration_steps": 500, "frame_interval": 500, "seed": 5,
+         "replicas": 2, "workers": 1, "protocol": "ramp"}
 
 
 class Interrupt(Exception):
@@ -37,7 +38,7 @@ def test_interrupted_run_resumes_to_identical_numbers(tmp_path, monkeypatch):
     with pytest.raises(Interrupt):
         s.run(str(tmp_path / "cut"))
     monkeypatch.setattr(Engine, "advance", real)
-    done = sorted(p.name for p in (tmp_path / "cut" / "points").iterdir()
+    done = sorted(p.name for p in (tmp_path / "cut" / "replicas" / "r00" / "points").iterdir()
                   if (p / "done.json").exists())
     assert len(done) == 1  # the first point finished, the second was cut
     resumed = s.run(str(tmp_path / "cut"))

@@ -13,7 +13,7 @@ import time
 import pytest
 
 from dnabraid import sweep
-from dnabraid.scene import SceneError
+from dnabraid.scenes import SceneError
 
 # A tiny braid: 13 beads per strand, 7400 steps per point (~0.6 s single-threaded). Faster
 # ramps (turn_rate 5e-4) let the strands pass through each other for some seeds.

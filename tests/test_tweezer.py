@@ -43,7 +43,7 @@ def discrete_theory(s):
 def test_tether_matches_discrete_wlc(tmp_path, force, length, steps):
     s = make_scene("tether", {"force_pN": force, "length_nm": length, "steps": steps,
                               "equilibration_steps": 20_000, "surface": False, "seed": 7,
-                              "frame_interval": 10_000})
+                              "frame_interval": 10_000, "replicas": 1})
     summ = s.run(str(tmp_path / "run"))
     ext = summ["points"][0]["extension_nm"]
     theory = discrete_theory(s)["extension_nm"]
@@ -58,7 +58,7 @@ def test_persistence_from_bending_cosines(tmp_path):
     """<cos beta> between consecutive bonds gives lp = -b / ln<cos beta> = 50 nm (F -> 0.05 pN)."""
     s = make_scene("tether", {"force_pN": 0.05, "length_nm": 100.0, "steps": 200_000,
                               "equilibration_steps": 10_000, "surface": False, "seed": 3,
-                              "frame_interval": 500})
+                              "frame_interval": 500, "replicas": 1})
     s.run(str(tmp_path / "run"))
     import MDAnalysis as mda
 
@@ -80,7 +80,7 @@ def braid_run(tmp_path_factory):
     out = tmp_path_factory.mktemp("braid") / "run"
     s = make_scene("braid", {"length_nm": 150.0, "tether_separation_nm": 30.0,
                              "turns": [-2, 0, 2], "steps": 150_000,
-                             "equilibration_steps": 30_000, "seed": 11})
+                             "equilibration_steps": 30_000, "seed": 11, "replicas": 1})
     return s, str(out), s.run(str(out))
 
 
@@ -141,8 +141,8 @@ def test_resume_skips_finished_points(braid_run, tmp_path):
 
     copy = tmp_path / "copy"
     shutil.copytree(out, copy)
-    pts = copy / "points"
-    victim = sorted(os.listdir(pts))[-1]  # the last point run (turns = -2)
+    pts = copy / "replicas" / "r00" / "points"
+    victim = sorted(os.listdir(pts))[-1]  # the last point run (turns = +2)
     shutil.rmtree(pts / victim)
     kept = {f: os.path.getmtime(pts / f / "done.json") for f in os.listdir(pts)}
     summ2 = s.run(str(copy))
@@ -157,7 +157,7 @@ def test_resume_refuses_a_different_scene(braid_run):
 
     s, out, summ = braid_run
     other = make_scene("braid", {"length_nm": 150.0, "tether_separation_nm": 30.0,
-                                 "turns": [-2, 0, 2], "force_pN": 3.0})
+                                 "turns": [-2, 0, 2], "force_pN": 3.0, "replicas": 1})
     with pytest.raises(RunDirError, match="force_pN"):
         other.run(out)
 

@@ -1,0 +1,45 @@
+"""Calibration of the reported error bars against an exact answer.
+
+The tether without wall and self-avoidance is exactly the discrete worm-like chain under
+force with harmonic bonds, whose mean extension :func:`dnabraid.continuum.wlc.discrete_wlc_exact`
+computes by a transfer matrix, independently of the simulation. Each replica starts from
+an exact equilibrium draw, so replica means are unbiased whatever the run length; the
+reported 95% interval (Student t across replicas) must then cover the exact value in about
+95% of independent studies, and the t-scores must scatter like Student t.
+"""
+
+import math
+
+import numpy as np
+import pytest
+from scipy import stats
+
+from dnabraid.continuum.wlc import discrete_wlc_exact
+from dnabraid.scenes import make_scene
+
+#: Independent studies (each: R replicas, its own seed).
+STUDIES = 12
+REPLICAS = 4
+
+
+def test_tether_error_bars_cover_the_exact_extension(tmp_path):
+    base = {"force_pN": 3.0, "length_nm": 25.0, "surface": False, "self_avoidance": False,
+            "steps": 10_000, "equilibration_steps": 0, "frame_interval": 10_000,
+            "replicas": REPLICAS, "workers": 1}
+    s0 = make_scene("tether", base)
+    d = s0.dna()
+    exact = discrete_wlc_exact(s0.force_pN, s0.n_beads - 1, s0.bead_spacing_nm, d.kappa_kT,
+                               d.kT, stretch_k_pN_per_nm=d.k_bond)["extension_nm"]
+    covered, t = 0, []
+    for k in range(STUDIES):
+        s = make_scene("tether", dict(base, seed=100 + k))
+        ext = s.run(str(tmp_path / f"s{k}"))["points"][0]["extension_nm"]
+        covered += abs(ext["mean"] - exact) <= ext["ci_halfwidth"]
+        t.append((ext["mean"] - exact) / ext["sem"])
+    # binomial(12, 0.95): P(covered <= 8) = 0.2 %; the check fails for badly wrong errors
+    assert covered >= 9, (covered, t)
+    # t-scores follow Student t with R - 1 = 3 dof: a Kolmogorov-Smirnov test at 1 %
+    p = stats.kstest(t, stats.t(df=REPLICAS - 1).cdf).pvalue
+    assert p > 0.01, (p, t)
+    assert math.isfinite(exact) and exact == pytest.approx(22.6, abs=0.5)
+    assert np.all(np.isfinite(t))
