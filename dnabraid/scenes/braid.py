@@ -20,7 +20,7 @@ import numpy as np
 from .. import observables as ob
 from .. import units
 from ..forces import bead_exclusion_force, pull_force, stretch_force, trap_force
-from ._tweezer import TweezerScene, _default_turns, lockup_turns
+from ._tweezer import TweezerScene, lockup_turns
 from .base import key
 
 
@@ -33,8 +33,12 @@ class Braid(TweezerScene):
     trap_parameter: ClassVar[str] = "trap_angle"
     needs_passage_barrier: ClassVar[bool] = True
 
-    turns: tuple = key(_default_turns(), "turns", "list of bead turn values n (catenation "
-                       "imposed by the rotational trap)")
+    turns: tuple = key((-2.0, -1.0, 0.0, 1.0, 2.0), "turns", "list of bead turn values n "
+                       "(catenation imposed by the rotational trap)")
+    steps: int = key(120000, "steps", "sampling steps per turn value and replica (after "
+                     "equilibration)")
+    equilibration_steps: int = key(30000, "steps", "equilibration steps after each change "
+                                   "of turns (more is cut from the data where it is detected)")
     tether_separation_nm: float = key(40.0, "nm", "distance between the two tether points "
                                       "(surface and bead)")
     trap_stiffness_pN_nm: float = key(20000.0, "pN nm", "rotational trap: U = -K cos(phi - "
