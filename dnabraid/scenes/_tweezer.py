@@ -396,6 +396,25 @@ class TweezerScene(Scene):
         return []
 
 
+@dataclasses.dataclass(frozen=True)
+class TurnedScene(TweezerScene):
+    """A tweezer scene whose bead is turned by a rotational trap (braid, plectoneme)."""
+
+    trap_parameter: ClassVar[str] = "trap_angle"
+    needs_passage_barrier: ClassVar[bool] = True
+
+    trap_stiffness_pN_nm: float = key(20000.0, "pN nm", "rotational trap: U = -K cos(phi - "
+                                      "2 pi n)")
+    turn_rate: float = key(5e-5, "turns/step", "speed at which the trap angle is ramped "
+                           "between turn values")
+
+    def validate(self) -> None:
+        super().validate()
+        self.need(self.trap_stiffness_pN_nm > 0, "trap_stiffness_pN_nm", "must be > 0")
+        self.need(0 < self.turn_rate <= 0.01, "turn_rate",
+                  "must be in (0, 0.01] turns per step")
+
+
 def lockup_turns(length_nm: float, diameter_nm: float) -> float:
     """Most turns a braid of two strands of length L and diameter d can hold: the two-ply
     locks up at theta = 45 deg (van der Heijden's talk on elastic braids, lock-up of the

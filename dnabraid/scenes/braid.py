@@ -20,18 +20,16 @@ import numpy as np
 from .. import observables as ob
 from .. import units
 from ..forces import bead_exclusion_force, pull_force, stretch_force, trap_force
-from ._tweezer import TweezerScene, lockup_turns
+from ._tweezer import TurnedScene, lockup_turns
 from .base import key
 
 
 @dataclasses.dataclass(frozen=True)
-class Braid(TweezerScene):
+class Braid(TurnedScene):
     name: ClassVar[str] = "braid"
     help: ClassVar[str] = ("two nicked DNA molecules between a surface and a magnetic bead, "
                            "braided by turning the bead: extension, torque and catenation "
                            "against turns")
-    trap_parameter: ClassVar[str] = "trap_angle"
-    needs_passage_barrier: ClassVar[bool] = True
 
     turns: tuple = key((-2.0, -1.0, 0.0, 1.0, 2.0), "turns", "list of bead turn values n "
                        "(catenation imposed by the rotational trap)")
@@ -41,16 +39,10 @@ class Braid(TweezerScene):
                                    "of turns (more is cut from the data where it is detected)")
     tether_separation_nm: float = key(40.0, "nm", "distance between the two tether points "
                                       "(surface and bead)")
-    trap_stiffness_pN_nm: float = key(20000.0, "pN nm", "rotational trap: U = -K cos(phi - "
-                                      "2 pi n)")
-    turn_rate: float = key(5e-5, "turns/step", "speed at which the trap angle is ramped "
-                           "between turn values")
 
     def validate(self) -> None:
         super().validate()
         need = self.need
-        need(self.trap_stiffness_pN_nm > 0, "trap_stiffness_pN_nm", "must be > 0")
-        need(0 < self.turn_rate <= 0.01, "turn_rate", "must be in (0, 0.01] turns per step")
         d = self.effective_diameter_nm
         need(self.tether_separation_nm >= d, "tether_separation_nm",
              f"must be >= the effective diameter {d:.2f} nm (the tethers would overlap)")

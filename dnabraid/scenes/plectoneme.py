@@ -30,7 +30,7 @@ from ..forces.twist import (
 )
 from ..geometry import random_tether
 from ..geometry.twist import writhe_open
-from ._tweezer import TweezerScene
+from ._tweezer import TurnedScene
 from .base import key
 
 #: Frame arm a (side particle distance from the axis) in units of the bead spacing.
@@ -48,22 +48,16 @@ BEAD_ARM_NM = 20.0
 
 
 @dataclasses.dataclass(frozen=True)
-class Plectoneme(TweezerScene):
+class Plectoneme(TurnedScene):
     name: ClassVar[str] = "plectoneme"
     help: ClassVar[str] = ("one torsionally constrained DNA molecule between surface and bead "
                            "under force, turned n times: extension and torque against turns "
                            "(the hat curve), buckling, twist, writhe and plectonemes")
-    trap_parameter: ClassVar[str] = "trap_angle"
-    needs_passage_barrier: ClassVar[bool] = True
 
     force_pN: float = key(1.0, "pN", "constant force pulling the magnetic bead up (> 0)")
     length_nm: float = key(300.0, "nm", "contour length of the DNA molecule")
     turns: tuple = key((0.0, 1.0, 2.0, 3.0, 4.0, 5.0, 6.0), "turns",
                        "list of bead turn values n (linking number imposed by the trap)")
-    trap_stiffness_pN_nm: float = key(20000.0, "pN nm", "rotational trap: U = -K cos(phi - "
-                                      "2 pi n)")
-    turn_rate: float = key(5e-5, "turns/step", "speed at which the trap angle is ramped "
-                           "between turn values")
     twist_persistence_nm: float = key(
         float(forcefield.mechanics()["twist_persistence_nm"]), "nm",
         "twist persistence length C of torsionally constrained DNA (Moroz & Nelson 1997, "
@@ -72,8 +66,6 @@ class Plectoneme(TweezerScene):
     def validate(self) -> None:
         super().validate()
         need = self.need
-        need(self.trap_stiffness_pN_nm > 0, "trap_stiffness_pN_nm", "must be > 0")
-        need(0 < self.turn_rate <= 0.01, "turn_rate", "must be in (0, 0.01] turns per step")
         need(self.twist_persistence_nm >= self.bead_spacing_nm, "twist_persistence_nm",
              "must be >= bead_spacing_nm (a bead chain cannot resolve a shorter twist "
              "persistence)")
