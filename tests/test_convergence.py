@@ -92,7 +92,7 @@ def test_detect_equilibration_vs_pymbar(seed):
     rng = np.random.default_rng(seed)
     x = ar1(rho, T, rng) + 10.0 * np.exp(-np.arange(T) / tau_eq)
     # pymbar's exact (fast=False) inefficiency; its fast mode overestimates g by ~20 %
-    t_p, g_p, neff_p = ts.detect_equilibration(x, fast=False, nskip=100)
+    t_p, g_p, neff_p = ts.detect_equilibration(x, fast=False, nskip=200)
     t0, g, n_eff = cv.detect_equilibration(x)
     assert abs(t0 - t_p) <= T0_TOL
     assert g == pytest.approx(float(g_p), rel=G_RTOL)
@@ -171,6 +171,13 @@ def test_rhat_ess_match_arviz(case):
     assert cv.ess(x) == pytest.approx(float(az.ess(x, method="bulk")), rel=ARVIZ_RTOL)
 
 
+def test_batched_autocovariance_is_the_stats_one():
+    rng = np.random.default_rng(10)
+    x = ar1(0.7, (3, 257), rng)
+    ref = np.stack([stats.autocorrelation(r) * r.var() for r in x])
+    np.testing.assert_allclose(cv._autocov_rows(x), ref, rtol=0, atol=1e-12 * ref[:, :1].max())
+
+
 def test_rhat_ess_known_values():
     """Theory: R-hat ~ 1 and ESS ~ R T for i.i.d. draws; ESS ~ R T / g for AR(1)."""
     rng = np.random.default_rng(8)
@@ -210,14 +217,15 @@ def test_rhat_ess_degenerate_input():
 
 @pytest.mark.parametrize("R, equilibration, seed", [(4, "chodera", 11), (8, "mser", 12)])
 def test_replica_summary_calibration(R, equilibration, seed):
-    """400 studies of R stationary AR(1) replicas (rho = 0.9, 1000 samples, g = 19).
+    """400 studies of R stationary AR(1) replicas (rho = 0.8, g = 9, 500 samples = 55 g).
 
     Theory: replica means are i.i.d. normal with mean 0, so mean / sem is Student t with
     R - 1 dof (variance (R - 1) / (R - 3)) and the t interval covers 0 with probability
-    0.95; split R-hat of converged positively correlated chains obeys R-hat^2 - 1 ~ m / ESS
-    with m = 2 R split chains (Vats & Knudson, Stat. Sci. 36, 518 (2021)).
+    0.95; for converged, positively correlated chains of N draws split R-hat obeys
+    R-hat^2 = (N - 1) / N + m / ESS with m = 2 R split chains of N = n / 2 draws, to leading
+    order (Vats & Knudson, Stat. Sci. 36, 518 (2021)).
     """
-    rho, T, n_studies = 0.9, 1000, 400
+    rho, T, n_studies = 0.8, 500, 400
     rng = np.random.default_rng(seed)
     res = [cv.replica_summary(ar1(rho, (R, T), rng), confidence=CONF,
                               equilibration=equilibration) for _ in range(n_studies)]
@@ -228,7 +236,7 @@ def test_replica_summary_calibration(R, equilibration, seed):
     assert COVERAGE_BAND[0] <= cov <= COVERAGE_BAND[1], cov
     tscore = means / sems
     assert sps.kstest(tscore, sps.t(R - 1).cdf).pvalue > KS_ALPHA
-    if R > 4:  # the sample variance of t_3 has infinite variance; t_7's is finite
+    if R > 5:  # the sample variance of t_3 has infinite variance; t_7's is finite
         nu = R - 1
         var_t = nu / (nu - 2)
         kurt = 3 + 6 / (nu - 4)
@@ -238,12 +246,14 @@ def test_replica_summary_calibration(R, equilibration, seed):
     assert np.mean(sems**2) / np.mean(means**2) == pytest.approx(1.0, abs=0.3)
     # the discarded transient costs little: variance of the mean vs exact no-discard value
     assert np.mean(means**2) / (var_mean_ar1(rho, T) / R) < 1.5
-    # Vats-Knudson relation between R-hat and ESS (asymptotic; 20 % named tolerance)
+    # Vats-Knudson relation between R-hat and ESS (leading order; 15 % named tolerance)
     rh = np.array([r["rhat"] for r in res])
     es = np.array([r["ess"] for r in res])
-    assert np.mean((rh**2 - 1) * es / (2 * R)) == pytest.approx(1.0, abs=0.2)
-    # ESS far below 400 for R T / g ~ 210 (R = 4) or 420 (R = 8): mostly not "converged"
-    assert np.mean([r["converged"] for r in res]) < 0.2
+    n_half = np.array([min(r["n_samples"]) // 2 for r in res])
+    assert np.mean((rh**2 - (n_half - 1) / n_half) * es / (2 * R)) == pytest.approx(1, abs=0.15)
+    # the verdict is exactly the two thresholds here (stationary: no equilibration flag)
+    verdict = (rh <= cv.RHAT_MAX) & (es >= cv.MIN_ESS)
+    assert np.array_equal(verdict, [r["converged"] for r in res])
 
 
 def test_slow_mode_seen_across_replicas_not_within():
@@ -261,9 +271,9 @@ def test_slow_mode_seen_across_replicas_not_within():
     assert not out["converged"]
     assert "R-hat" in out["reason"]
 
-    # calibration over 400 studies: the t interval covers 0 at the nominal rate; an
-    # interval from the within-replica SEM covers with 2 Phi(1.96 s_w / s_tot) - 1
-    n_studies = 400
+    # calibration over 400 studies of 500 samples: the t interval covers 0 at the nominal
+    # rate; an interval from the within-replica SEM covers with 2 Phi(1.96 s_w / s_tot) - 1
+    n_studies, T = 400, 500
     covered_t, covered_w = [], []
     for _ in range(n_studies):
         x = ar1(rho, (R, T), rng) + s_slow * rng.normal(size=(R, 1))
@@ -271,7 +281,7 @@ def test_slow_mode_seen_across_replicas_not_within():
         covered_t.append(abs(o["mean"]) <= o["ci_halfwidth"])
         covered_w.append(abs(o["mean"]) <= 1.96 * o["sem_within"])
     s_w = math.sqrt(var_mean_ar1(rho, T))
-    p_w = 2 * sps.norm.cdf(1.96 * s_w / math.sqrt(s_slow**2 + s_w**2)) - 1  # 0.07
+    p_w = 2 * sps.norm.cdf(1.96 * s_w / math.sqrt(s_slow**2 + s_w**2)) - 1  # 0.14
     assert COVERAGE_BAND[0] <= np.mean(covered_t) <= COVERAGE_BAND[1]
     assert np.mean(covered_w) == pytest.approx(p_w, abs=4 * math.sqrt(p_w / n_studies))
 

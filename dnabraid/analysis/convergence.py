@@ -35,15 +35,18 @@ Thresholds
 Vehtari et al. (2021, Sec. 4) recommend, for final results, R-hat < 1.01 and a bulk ESS
 > 400 (100 per chain with 4 chains); these are the defaults :data:`RHAT_MAX` and
 :data:`MIN_ESS`. The two are linked: for positively autocorrelated but perfectly converged
-chains, split R-hat obeys ``R-hat^2 - 1 ~ m / ESS`` with ``m = 2 R`` split chains
-(D. Vats, C. Knudson, Stat. Sci. 36, 518 (2021)); the test suite measures this. Passing
-R-hat < 1.01 therefore needs a bulk ESS of roughly ``100 R``, i.e. 400 for the 4 replicas
-Vehtari et al. assume. For exploratory runs of a slow simulation with few replicas the
-relaxed pair ``rhat_max=1.05, min_ess=100`` (:data:`RHAT_MAX_RELAXED`,
-:data:`MIN_ESS_RELAXED`) is consistent in the same sense for ``R`` about 5. Whatever the
-verdict, :func:`replica_summary`'s ``sem`` and ``ci_halfwidth`` come from the scatter of
-independent replica means and stay calibrated as long as each replica is equilibrated;
-the verdict says whether that premise is credible.
+chains, split R-hat obeys ``R-hat^2 = (N - 1) / N + m / ESS`` to leading order, with
+``m = 2 R`` split chains of ``N`` draws (D. Vats, C. Knudson, Stat. Sci. 36, 518 (2021));
+the tests measure this relation to hold within 1-4 % on AR(1) replicas. So R-hat exceeds
+1.01 by chance alone unless the bulk ESS is above roughly ``100 R`` (400 for the 4 chains
+Vehtari et al. assume): the defaults demand ESS ~ 100 per replica, i.e. replicas of a few
+hundred correlation times. For exploratory runs of a slow simulation with few replicas,
+``rhat_max=1.05, min_ess=100`` (:data:`RHAT_MAX_RELAXED`, :data:`MIN_ESS_RELAXED`) is the
+practical pair, consistent in the same sense for ``R`` about 5 (``m / ESS = 0.1``).
+Whatever the verdict, :func:`replica_summary`'s ``sem`` and ``ci_halfwidth`` come from the
+scatter of independent replica means and stay calibrated as long as each replica is
+equilibrated (tests: 93-97 % coverage of nominal 95 % intervals with 4 or 8 replicas of
+only ~55 correlation times); the verdict says whether that premise is credible.
 """
 
 from __future__ import annotations
@@ -54,12 +57,10 @@ from collections.abc import Sequence
 import numpy as np
 from scipy import fft as _fft
 from scipy import special as _special
-from scipy import stats as _sps
 
 from .stats import (
     MIN_SAMPLES,
     _as_series,
-    autocorrelation,
     integrated_autocorrelation_time,
     mean_sem,
 )
@@ -93,6 +94,8 @@ _SOKAL_C = 5.0
 _MIN_DRAWS = 4
 #: Largest FFT work array (elements) built at once in the suffix autocovariances.
 _MAX_WORK = 1 << 21
+#: Up to this many lagged products (samples x lags) they are formed directly, not by FFT.
+_MAX_DIRECT = 1 << 19
 
 
 # --------------------------------------------------------------------------------------
@@ -107,8 +110,9 @@ def _suffix_acov(y: np.ndarray, cands: np.ndarray, kmax: int) -> np.ndarray:
     ``m`` the suffix mean (zero for ``k >= n``): the estimator of
     :func:`dnabraid.analysis.stats.autocorrelation`. The lagged products are summed per
     segment between breakpoints (all candidates plus a regular grid, so no segment is long)
-    by batched FFT cross-correlation, and accumulated from the end; the mean corrections
-    come from prefix sums. Cost ``O((T + J kmax) log)`` instead of ``O(J T log T)``.
+    by batched FFT cross-correlation (or, for small ``T kmax``, formed directly), and
+    accumulated from the end; the mean corrections come from prefix sums. Cost
+    ``O((T + J kmax) log)`` instead of ``O(J T log T)``.
 
     Parameters
     ----------
@@ -125,25 +129,32 @@ def _suffix_acov(y: np.ndarray, cands: np.ndarray, kmax: int) -> np.ndarray:
     """
     T = y.size
     c0 = int(cands[0])
-    seg_cap = max(kmax, -(-(T - c0) // 128))
-    bps = np.union1d(cands, np.arange(c0, T, seg_cap))
-    seg_len = np.diff(np.append(bps, T))
-    nfft = _fft.next_fast_len(int(seg_len.max()) + kmax, real=True)
-    ypad = np.concatenate([y, np.zeros(nfft)])
-    col = np.arange(nfft)
-    nseg = bps.size
-    G = np.empty((nseg, kmax + 1))
-    rows = max(1, _MAX_WORK // nfft)
-    for s in range(0, nseg, rows):
-        sl = slice(s, min(nseg, s + rows))
-        b = ypad[bps[sl, None] + col]  # y[bp : bp + nfft], zero beyond T
-        a = np.where(col < seg_len[sl, None], b, 0.0)  # the segment itself
-        fa = _fft.rfft(a, nfft, axis=1)
-        fb = _fft.rfft(b, nfft, axis=1)
-        # no wrap-around: segment index i < L and lag k <= kmax with L + kmax <= nfft
-        G[sl] = _fft.irfft(np.conj(fa) * fb, nfft, axis=1)[:, : kmax + 1]
-    S = np.cumsum(G[::-1], axis=0)[::-1]  # S[j, k] = sum_{i >= bp_j} y_i y_{i+k}
-    S = S[np.searchsorted(bps, cands)]
+    if (T - c0) * (kmax + 1) <= _MAX_DIRECT:
+        # small problem: all lagged products at once, summed from the end
+        lagged = np.lib.stride_tricks.sliding_window_view(
+            np.concatenate([y[c0:], np.zeros(kmax)]), kmax + 1)  # [i, k] = y[c0 + i + k]
+        seg = np.add.reduceat(y[c0:, None] * lagged, cands - c0, axis=0)
+        S = np.cumsum(seg[::-1], axis=0)[::-1]
+    else:
+        seg_cap = max(kmax, -(-(T - c0) // 128))
+        bps = np.union1d(cands, np.arange(c0, T, seg_cap))
+        seg_len = np.diff(np.append(bps, T))
+        nfft = _fft.next_fast_len(int(seg_len.max()) + kmax, real=True)
+        ypad = np.concatenate([y, np.zeros(nfft)])
+        col = np.arange(nfft)
+        nseg = bps.size
+        G = np.empty((nseg, kmax + 1))
+        rows = max(1, _MAX_WORK // nfft)
+        for s in range(0, nseg, rows):
+            sl = slice(s, min(nseg, s + rows))
+            b = ypad[bps[sl, None] + col]  # y[bp : bp + nfft], zero beyond T
+            a = np.where(col < seg_len[sl, None], b, 0.0)  # the segment itself
+            fa = _fft.rfft(a, nfft, axis=1)
+            fb = _fft.rfft(b, nfft, axis=1)
+            # no wrap-around: segment index i < L and lag k <= kmax with L + kmax <= nfft
+            G[sl] = _fft.irfft(np.conj(fa) * fb, nfft, axis=1)[:, : kmax + 1]
+        S = np.cumsum(G[::-1], axis=0)[::-1]  # S[j, k] = sum_{i >= bp_j} y_i y_{i+k}
+        S = S[np.searchsorted(bps, cands)]
     P = np.concatenate([[0.0], np.cumsum(y)])  # P[i] = sum_{j < i} y_j
     c = cands[:, None]
     k = np.arange(kmax + 1)[None, :]
@@ -221,6 +232,51 @@ def _grid(lo: int, hi: int, nskip: int, ncand: int) -> tuple[np.ndarray, int]:
     return np.arange(first, hi + 1, step, dtype=np.int64), step
 
 
+def _chodera(arr: np.ndarray, nskip: int, max_fraction: float, n_candidates: int,
+             c: float) -> tuple[int, float, float, bool]:
+    """:func:`detect_equilibration` on a validated series, plus an edge flag.
+
+    The flag is True when the best point of the first (coarsest) grid is its last one,
+    i.e. ``N_eff(t0)`` still rises at ``max_fraction * T``: no equilibrated region found.
+    """
+    T = arr.size
+    nskip = int(nskip)
+    if nskip < 1:
+        raise ValueError(f"nskip must be >= 1; got {nskip}")
+    if int(n_candidates) < 3:
+        raise ValueError(f"n_candidates must be >= 3; got {n_candidates}")
+    if not 0.0 < max_fraction <= 1.0:
+        raise ValueError(f"max_fraction must lie in (0, 1]; got {max_fraction}")
+    if T <= MIN_SAMPLES:
+        return 0, 1.0, float(T), False
+    if np.ptp(arr) == 0.0:
+        return 0, 1.0, 1.0, False
+    y = arr - arr.mean()
+    smax = np.maximum.accumulate(arr[::-1])[::-1]
+    smin = np.minimum.accumulate(arr[::-1])[::-1]
+    const_suffix = smax == smin
+    # initial lag budget from the tail, which is the most likely equilibrated part
+    _, w_tail = integrated_autocorrelation_time(arr[T // 2:], c=c)
+    kmax0 = max(16, 2 * w_tail)
+    lo, hi = 0, max(0, min(T - MIN_SAMPLES, int(max_fraction * T)))
+    best = (-np.inf, 0, 1.0)
+    edge = None
+    while True:
+        cands, step = _grid(lo, hi, nskip, int(n_candidates))
+        g, neff = _neff_at(arr, y, cands, kmax0, const_suffix, c)
+        j = int(np.argmax(neff))
+        if edge is None:
+            edge = cands.size > 1 and j == cands.size - 1
+        if neff[j] > best[0]:
+            best = (float(neff[j]), int(cands[j]), float(g[j]))
+        if step <= nskip or cands.size < 2:
+            break
+        lo = int(cands[max(j - 1, 0)])
+        hi = int(cands[min(j + 1, cands.size - 1)])
+    neff_best, t0, g0 = best
+    return t0, g0, neff_best, bool(edge)
+
+
 def detect_equilibration(x, *, nskip: int = 1, max_fraction: float = 0.5,
                          n_candidates: int = 100,
                          c: float = _SOKAL_C) -> tuple[int, float, float]:
@@ -231,16 +287,26 @@ def detect_equilibration(x, *, nskip: int = 1, max_fraction: float = 0.5,
     exactly as :func:`dnabraid.analysis.stats.integrated_autocorrelation_time` computes it
     for that suffix (clipped below at 1, as pymbar does), and ``N_eff(t0) = (T - t0) /
     g(t0)``; the ``t0`` maximising ``N_eff`` is returned (J. D. Chodera, J. Chem. Theory
-    Comput. 12, 1799 (2016), Eq. 7-8; pymbar's ``timeseries.detect_equilibration`` is the
-    reference implementation, which uses its own estimator of ``g`` and counts
-    ``T - t0 + 1`` samples).
+    Comput. 12, 1799 (2016); pymbar's ``timeseries.detect_equilibration`` is the reference
+    implementation, which uses its own estimator of ``g`` and counts ``T - t0 + 1``
+    samples).
 
-    Candidates are the multiples of ``nskip`` with at least ``MIN_SAMPLES`` samples after
-    them. When there are more than ``n_candidates`` of them, a grid of at most
+    Candidates are the multiples of ``nskip`` up to ``max_fraction * T`` (and leaving at
+    least ``MIN_SAMPLES`` samples). pymbar searches the whole series (``max_fraction=1``);
+    the default 0.5 is a deliberate deviation: ``g`` estimated from a short suffix is
+    biased low (its autocorrelation is measured about its own mean), so ``N_eff`` of
+    late starts is overestimated and the full search picks spurious late ``t0``. On
+    stationary AR(1) series of 50 correlation times the full search put ``t0`` past the
+    middle in 13 % of cases and inflated the variance of the kept mean 2.2-fold
+    (1.2-fold with the default). A run that needs more than half its length to equilibrate
+    is too short to judge anyway (the same convention as :func:`mser`).
+
+    When there are more than ``n_candidates`` candidates, a grid of at most
     ``n_candidates`` is scanned first and the neighbourhood of its best point is refined
     with finer grids until the spacing is ``nskip`` (so the answer is a local maximum of
     the noisy ``N_eff(t0)`` near the coarse global one). All suffix autocovariances of a
-    grid come from one batched FFT pass, so 10^5 samples take tens of milliseconds.
+    grid come from one batched pass (cost about that of a few FFTs of the series): on one
+    core about 2.5 ms for 10^3 samples, 10 ms for 10^4 and 40 ms for 10^5.
 
     Parameters
     ----------
@@ -248,6 +314,8 @@ def detect_equilibration(x, *, nskip: int = 1, max_fraction: float = 0.5,
         Time series (any unit), finite.
     nskip : int, optional
         Spacing of candidate starts (resolution of ``t0``), >= 1.
+    max_fraction : float, optional
+        Latest candidate start as a fraction of ``T``, in (0, 1].
     n_candidates : int, optional
         Most candidates evaluated per refinement level, >= 3.
     c : float, optional
@@ -264,49 +332,21 @@ def detect_equilibration(x, *, nskip: int = 1, max_fraction: float = 0.5,
 
     Notes
     -----
-    Series shorter than ``MIN_SAMPLES + 1`` return ``(0, 1.0, T)`` (no estimate possible).
-    A constant series returns ``(0, 1.0, 1.0)``, and a constant suffix counts as one
-    sample, both as in pymbar.
+    Series of at most ``MIN_SAMPLES`` samples return ``(0, 1.0, T)`` (no estimate
+    possible). A constant series returns ``(0, 1.0, 1.0)``, and a constant suffix counts
+    as one sample, both as in pymbar.
     """
-    arr = _as_series(x)
-    T = arr.size
-    nskip = int(nskip)
-    if nskip < 1:
-        raise ValueError(f"nskip must be >= 1; got {nskip}")
-    if int(n_candidates) < 3:
-        raise ValueError(f"n_candidates must be >= 3; got {n_candidates}")
-    if T <= MIN_SAMPLES:
-        return 0, 1.0, float(T)
-    if np.ptp(arr) == 0.0:
-        return 0, 1.0, 1.0
-    y = arr - arr.mean()
-    smax = np.maximum.accumulate(arr[::-1])[::-1]
-    smin = np.minimum.accumulate(arr[::-1])[::-1]
-    const_suffix = smax == smin
-    # initial lag budget from the tail, which is the most likely equilibrated part
-    _, w_tail = integrated_autocorrelation_time(arr[T // 2:], c=c)
-    kmax0 = max(16, 2 * w_tail)
-    lo, hi = 0, max(0, min(T - MIN_SAMPLES, int(max_fraction * T)))
-    best = (-np.inf, 0, 1.0)
-    while True:
-        cands, step = _grid(lo, hi, nskip, int(n_candidates))
-        g, neff = _neff_at(arr, y, cands, kmax0, const_suffix, c)
-        j = int(np.argmax(neff))
-        if neff[j] > best[0]:
-            best = (float(neff[j]), int(cands[j]), float(g[j]))
-        if step <= nskip or cands.size < 2:
-            break
-        lo = int(cands[max(j - 1, 0)])
-        hi = int(cands[min(j + 1, cands.size - 1)])
-    neff_best, t0, g0 = best
-    return t0, g0, neff_best
+    return _chodera(_as_series(x), nskip, max_fraction, n_candidates, c)[:3]
 
 
-def _mser(x, batch: int) -> tuple[int, bool]:
+def _mser(x, batch: int, max_fraction: float = 0.5) -> tuple[int, bool]:
+    """:func:`mser` plus a flag: True when the minimum lies at the edge of the search."""
     arr = _as_series(x)
     batch = int(batch)
     if batch < 1:
         raise ValueError(f"batch must be >= 1; got {batch}")
+    if not 0.0 < max_fraction <= 1.0:
+        raise ValueError(f"max_fraction must lie in (0, 1]; got {max_fraction}")
     k = arr.size // batch
     if k < 4:
         return 0, False
@@ -316,12 +356,12 @@ def _mser(x, batch: int) -> tuple[int, bool]:
     s2 = np.cumsum((z * z)[::-1])[::-1]
     cnt = np.arange(k, 0, -1, dtype=np.float64)
     stat = (s2 - s1 * s1 / cnt) / cnt**2  # MSER(d), d = 0 .. k-1
-    dmax = k // 2
+    dmax = min(k - 2, int(max_fraction * k))
     d = int(np.argmin(stat[: dmax + 1]))
-    return d * batch, d == dmax
+    return d * batch, dmax > 0 and d == dmax
 
 
-def mser(x, batch: int = 5) -> int:
+def mser(x, batch: int = 5, *, max_fraction: float = 0.5) -> int:
     """Truncation point by the MSER rule (MSER-5 for ``batch=5``).
 
     The series is cut into ``k = T // batch`` consecutive batch means ``Z_1 .. Z_k`` (a
@@ -333,8 +373,9 @@ def mser(x, batch: int = 5) -> int:
     White, Simulation 69, 323 (1997); MSER-5: White, Cobb & Spratt, Proc. Winter Simulation
     Conf. 2000). As is usual (White & Robinson, J. Simulation 4, 45 (2010); Hoad,
     Robinson & Davies, J. Oper. Res. Soc. 62, 1389 (2011)), ``d`` is searched in the first
-    half only, where the statistic is reliable: a minimum at ``d = k // 2``, the edge of
-    the search, means the run is too short to have equilibrated.
+    half only (``max_fraction``), where the statistic is reliable (near the end it is a
+    variance of a handful of batch means and has spurious minima): a minimum at the edge
+    of the search means the run is too short to have equilibrated.
 
     Parameters
     ----------
@@ -342,13 +383,16 @@ def mser(x, batch: int = 5) -> int:
         Time series, finite.
     batch : int, optional
         Batch size (5 for MSER-5).
+    max_fraction : float, optional
+        Largest ``d`` searched, as a fraction of the ``k`` batches, in (0, 1] (at most
+        ``k - 2``).
 
     Returns
     -------
     int
         ``t0 = d* batch``, samples to discard; 0 for fewer than 4 batches.
     """
-    return _mser(x, batch)[0]
+    return _mser(x, batch, max_fraction)[0]
 
 
 # --------------------------------------------------------------------------------------
@@ -445,6 +489,20 @@ def _rhat_ess(arr: np.ndarray) -> tuple[float, float]:
     return max(bulk, tail), n_ess
 
 
+def _autocov_rows(arr: np.ndarray) -> np.ndarray:
+    """Biased autocovariance of every row by one batched FFT, shape (m, n).
+
+    Row by row this is ``autocorrelation(row) * row.var()`` of
+    :func:`dnabraid.analysis.stats.autocorrelation` (the tests check it), done at once
+    for all chains.
+    """
+    n = arr.shape[1]
+    d = arr - arr.mean(axis=1, keepdims=True)
+    nfft = _fft.next_fast_len(2 * n - 1, real=True)
+    f = _fft.rfft(d, nfft, axis=1)
+    return _fft.irfft(f * np.conj(f), nfft, axis=1)[:, :n] / n
+
+
 def _ess_geyer(arr: np.ndarray) -> float:
     """Multi-chain ESS of (split, z-scaled) chains, Vehtari et al. (2021) Sec. 3.2.
 
@@ -457,7 +515,7 @@ def _ess_geyer(arr: np.ndarray) -> float:
     m, n = arr.shape
     if np.ptp(arr) < np.finfo(float).resolution:
         return float(arr.size)
-    acov = np.stack([autocorrelation(ch) * ch.var() for ch in arr])  # biased, per chain
+    acov = _autocov_rows(arr)
     mean_var = float(acov[:, 0].mean()) * n / (n - 1.0)
     var_plus = mean_var * (n - 1.0) / n
     if m > 1:
@@ -540,9 +598,9 @@ def replica_summary(series_list, *, confidence: float = 0.95, equilibration="cho
        and ``ess`` (:func:`ess`) of the post-equilibration parts cut to a common length
        (the last ``min_r n_r`` samples of each replica, the best-equilibrated ones).
     4. ``converged`` is True when R-hat <= ``rhat_max``, ESS >= ``min_ess`` and no replica
-       spent more than ``max_equilibration_fraction`` of its length equilibrating (for
-       MSER: its minimum lies at the edge of the half-length search). A constant
-       observable (all samples equal) is converged with ``sem = 0``.
+       needed more than ``max_equilibration_fraction`` of its length to equilibrate (the
+       detectors search only that far; a best point at the edge of the search counts as
+       failure). A constant observable (all samples equal) is converged with ``sem = 0``.
 
     Parameters
     ----------
@@ -559,7 +617,9 @@ def replica_summary(series_list, *, confidence: float = 0.95, equilibration="cho
         :data:`RHAT_MAX_RELAXED` = 1.05 and :data:`MIN_ESS_RELAXED` = 100 are a consistent
         pair for exploratory runs of slow simulations (module docstring).
     max_equilibration_fraction : float, optional
-        Largest acceptable discarded fraction of a replica.
+        Largest acceptable discarded fraction of a replica, in (0, 1]; also the search
+        range of the detectors (``max_fraction`` of :func:`detect_equilibration` and
+        :func:`mser`).
 
     Returns
     -------
@@ -569,7 +629,7 @@ def replica_summary(series_list, *, confidence: float = 0.95, equilibration="cho
         ``n_samples`` (list of int, samples kept per replica); ``replica_means`` and
         ``replica_sems`` (ndarray, shape (R,), mean and within-replica SEM of each kept
         part); ``sem_within``; ``rhat``; ``ess`` (NaN when fewer than 4 samples are common
-        to all replicas); ``rhat_max``; ``min_ess``; ``converged`` (bool); ``reason`` (str:
+        to all replicas; ``rhat`` also NaN for a constant observable); ``rhat_max``; ``min_ess``; ``converged`` (bool); ``reason`` (str:
         the failed checks joined by "; ", e.g. "R-hat 1.08 > 1.01; ESS 45 < 400;
         equilibration took > 50% of replica 3" with 0-based replica indices, or a line
         starting with "ok" when converged).
@@ -579,6 +639,23 @@ def replica_summary(series_list, *, confidence: float = 0.95, equilibration="cho
     ValueError
         Fewer than 2 replicas, bad ``confidence`` or ``equilibration``, non-finite data,
         or an integer ``equilibration`` that leaves a replica empty.
+
+    Notes
+    -----
+    Measured on 400 studies of stationary AR(1) replicas of 500 samples (55 correlation
+    times, ``tests/test_convergence.py``): the 95 % interval covered the truth in 94-97 %
+    of studies with 4 replicas and 93-96 % with 8, and ``mean / sem`` followed Student t
+    (Kolmogorov-Smirnov p > 0.2). On such short replicas the data-driven truncation is not
+    free: it raised the variance of ``mean`` by ~30 % with ``"chodera"`` and ~0-30 % with
+    ``"mser"`` relative to keeping everything, and ``sem_within`` came out low (its square
+    58-62 % of ``sem``'s mean square for Chodera, 80-86 % for MSER), because the start is
+    chosen where the suffix looks least correlated. ``sem`` is not affected, being an
+    honest scatter of the kept means. For replicas of hundreds of correlation times these
+    effects fade (Chodera: +3 % variance at 260 correlation times).
+
+    The equilibration flag can fire on a stationary replica by chance: per replica, in
+    3 % (Chodera) / 1 % (MSER) of AR(1) series of 22 correlation times, 1 % / 0 % at 56,
+    0.1 % / 0 % at 220.
     """
     if isinstance(series_list, np.ndarray) and series_list.ndim == 2:
         series = [_as_series(row) for row in series_list]
@@ -591,6 +668,9 @@ def replica_summary(series_list, *, confidence: float = 0.95, equilibration="cho
         raise ValueError(f"need at least 2 replicas; got {R}")
     if not 0.0 < confidence < 1.0:
         raise ValueError(f"confidence must lie in (0, 1); got {confidence}")
+    if not 0.0 < max_equilibration_fraction <= 1.0:
+        raise ValueError("max_equilibration_fraction must lie in (0, 1]; "
+                         f"got {max_equilibration_fraction}")
 
     t0s: list[int] = []
     too_long: list[int] = []
@@ -603,9 +683,9 @@ def replica_summary(series_list, *, confidence: float = 0.95, equilibration="cho
                 raise ValueError(
                     f"equilibration={t0} leaves no samples of replica {r} (length {s.size})")
         elif equilibration == "chodera":
-            t0, edge = detect_equilibration(s)[0], False
+            t0, _, _, edge = _chodera(s, 1, max_equilibration_fraction, 100, _SOKAL_C)
         elif equilibration == "mser":
-            t0, edge = _mser(s, 5)
+            t0, edge = _mser(s, 5, max_equilibration_fraction)
         else:
             raise ValueError(
                 f"equilibration must be 'chodera', 'mser', an int or None; got {equilibration!r}")
@@ -618,7 +698,7 @@ def replica_summary(series_list, *, confidence: float = 0.95, equilibration="cho
     sems_r = np.array([mean_sem(k)["sem"] for k in kept])
     mean = float(means.mean())
     sem = float(means.std(ddof=1) / math.sqrt(R))
-    tq = float(_sps.t.ppf(0.5 + 0.5 * confidence, R - 1))
+    tq = float(_special.stdtrit(R - 1, 0.5 + 0.5 * confidence))  # Student-t quantile
     sem_within = float(math.sqrt(float(np.sum(sems_r**2))) / R)
 
     lmin = min(k.size for k in kept)
@@ -636,7 +716,7 @@ def replica_summary(series_list, *, confidence: float = 0.95, equilibration="cho
         reasons.append(f"only {lmin} post-equilibration samples common to all replicas")
     else:
         if not rhat <= rhat_max:
-            reasons.append(f"R-hat {rhat:.3g} > {rhat_max:g}")
+            reasons.append(f"R-hat {rhat:.4g} > {rhat_max:g}")
         if not ess_b >= min_ess:
             reasons.append(f"ESS {ess_b:.0f} < {min_ess:g}")
     for r in too_long:
@@ -646,7 +726,7 @@ def replica_summary(series_list, *, confidence: float = 0.95, equilibration="cho
     if constant:
         reason = "ok (constant observable)" if converged else "; ".join(reasons)
     elif converged:
-        reason = f"ok (R-hat {rhat:.3g} <= {rhat_max:g}, ESS {ess_b:.0f} >= {min_ess:g})"
+        reason = f"ok (R-hat {rhat:.4g} <= {rhat_max:g}, ESS {ess_b:.0f} >= {min_ess:g})"
     else:
         reason = "; ".join(reasons)
 
