@@ -39,6 +39,14 @@ class PlatformError(ValueError):
     """The requested OpenMM platform is not available here."""
 
 
+def check_platform(platform: str) -> None:
+    """Raise :class:`PlatformError` unless OpenMM has ``platform`` here."""
+    names = available_platforms()
+    if platform not in names:
+        raise PlatformError(f"platform {platform!r} is not available here; available: "
+                            + ", ".join(names))
+
+
 def pin_to_one_core() -> None:
     """Pin this process to one core.
 

@@ -101,7 +101,7 @@ def test_linking_number_conserved(twisted_run):
     s, out, summ = twisted_run
     from dnabraid.reporters import read_point
 
-    pdir = os.path.join(out, "points")
+    pdir = os.path.join(out, "replicas", "r00", "points")
     for f in sorted(os.listdir(pdir)):
         samples, frames = read_point(os.path.join(pdir, f))
         turns = float(frames["turns"][0])

@@ -25,7 +25,7 @@ from ..chains import (
     max_bead_spacing_nm,
     passage_barrier_kT,
 )
-from ..engine import MAX_SEED, Engine
+from ..engine import MAX_SEED, Engine, check_platform
 from ..forces.chiral import chiral_force
 from ..protocols import TurnSchedule
 from ..runner import run_schedule
@@ -289,6 +289,7 @@ class TweezerScene(Scene):
     def run(self, out: str, *, platform: str = "CPU", threads: int | None = None,
             progress_factory=None) -> dict:
         t0 = time.perf_counter()
+        check_platform(platform)
         model = self.build()
         rundir.prepare_out_dir(self, out)
         sched = self.schedule()
