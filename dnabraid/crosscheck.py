@@ -1,4 +1,4 @@
-"""Zero-temperature cross-checks of the bead model against the continuum module (issue 6).
+"""Zero-temperature cross-checks of the bead model against the continuum module.
 
 :func:`zero_temperature_braid` braids the bead model of a tweezer scene at T = 0: starting
 from straight strands it turns the rotational trap to 2 pi n in small increments,
@@ -21,8 +21,8 @@ import time
 
 import numpy as np
 
-from .analysis.geometry import catenation_number
-from .scene import make_scene
+from .geometry.curves import catenation_number
+from .scenes import make_scene
 
 TWO_PI = 2.0 * math.pi
 
@@ -57,14 +57,13 @@ def zero_temperature_braid(turns: float, overrides: dict | None = None, *, incre
     tolerance_pN : float
         Force tolerance of OpenMM's L-BFGS minimiser (a final pass uses 1/10 of it).
     """
-    from .build import build
     from .engine import Engine
 
     t0 = time.perf_counter()
     over = {"surface": False, **(overrides or {}), "turns": [float(turns)]}
     s = make_scene("braid", over)
-    m = build(s)
-    e = Engine(m, threads=1)
+    m = s.build()
+    e = Engine(m, seed=s.seed, threads=1)
     e.minimise(tolerance_pN=tolerance_pN, max_iterations=20000)
     for k in range(1, increments + 1):
         e.set_parameter("trap_angle", TWO_PI * turns * k / increments)

@@ -761,8 +761,8 @@ def sweep_plot(spec: SweepSpec, rows: list[dict], path: str) -> str | None:
     A scene with several rows per point (tweezer scenes: one per turn value) gives one
     curve per point of its second result column against its first (extension against
     turns); a scene with one row per point (the knot scene) gives its first varying result
-    column against the first numeric grid key, one curve per value of the other keys.
-    Error bars come from the matching ``_sem`` column. If the rows hold +n and -n turns and
+    column against the first numeric grid key, one curve per value of the other keys, with
+    its theory column dashed where the scene gives one. Error bars come from the matching ``_sem`` column. If the rows hold +n and -n turns and
     the sweep varies ``alpha`` (or has more than one point), a second panel shows the
     asymmetry z(+n) - z(-n) against the swept key (``alpha`` if swept, else the first
     numeric grid key). Returns the path, or None when no point finished.
@@ -799,6 +799,9 @@ def sweep_plot(spec: SweepSpec, rows: list[dict], path: str) -> str | None:
     axes = fig.subplots(1, ncol, squeeze=False)
     ax = axes[0, 0]
     ysem = _sem_of(ycol, cols)
+    # a theory column beside the measured one (knot: radius_apex_nm, radius_theory_nm)
+    theory = next((c for c in numeric if "theory" in c and c != ycol
+                   and c.split("_")[0] == ycol.split("_")[0]), None)
 
     def bars(rs):
         return [(r.get(ysem) or 0) if ysem else 0 for r in rs]
@@ -826,6 +829,9 @@ def sweep_plot(spec: SweepSpec, rows: list[dict], path: str) -> str | None:
             label = ", ".join(f"{k}={v}" for k, v in zip(others, g)) or None
             ax.errorbar(xs, [r[ycol] for r in rs], yerr=bars(rs), fmt="o-", ms=3, capsize=2,
                         label=label, color=f"C{j % 10}")
+            if theory:
+                ax.plot(xs, [r[theory] for r in rs], "--", color=f"C{j % 10}", lw=1,
+                        label=f"{theory}" + (f" ({label})" if label else ""))
     ax.set_xlabel(xcol or "point")
     ax.set_ylabel(ycol)
     if ax.get_legend_handles_labels()[1]:
@@ -863,6 +869,14 @@ def sweep_plot(spec: SweepSpec, rows: list[dict], path: str) -> str | None:
 # ---------------------------------------------------------------------------------------
 # trajectory analysis (MDAnalysis)
 # ---------------------------------------------------------------------------------------
+def _frame_turns(path: str):
+    """The turn value of every frame of a run's ``trajectory.dcd`` (from its ``frames.csv``)."""
+    import numpy as np
+
+    with open(path, newline="") as fh:
+        return np.array([float(r["turns"]) for r in csv.DictReader(fh)])
+
+
 def analyse_sweep(sweep_dir: str, *, crossing_cutoff_nm: float | None = None,
                   write: bool = True) -> list[dict]:
     """Analyse every finished point's two-strand trajectory with MDAnalysis.
@@ -870,7 +884,8 @@ def analyse_sweep(sweep_dir: str, *, crossing_cutoff_nm: float | None = None,
     Points without a ``trajectory.dcd`` (the knot scene writes none) are left out. Opens ``topology.pdb`` + ``trajectory.dcd`` of each point and runs
     :class:`~dnabraid.analysis.mda.Extension`, :class:`~dnabraid.analysis.mda.Catenation`
     and :class:`~dnabraid.analysis.mda.CrossingAngles` over its frames; the frames are
-    split per turn value with the frame counts in ``summary.json``.
+    split per turn value with the run's ``frames.csv`` (which names each frame's turn value,
+    whatever the order of replicas and turn values in the trajectory).
 
     Parameters
     ----------
@@ -898,7 +913,8 @@ def analyse_sweep(sweep_dir: str, *, crossing_cutoff_nm: float | None = None,
     rows = []
     for p in spec.points:
         d = _point_dir(spec, p)
-        files = [os.path.join(d, f) for f in ("topology.pdb", "trajectory.dcd", "summary.json")]
+        files = [os.path.join(d, f) for f in ("topology.pdb", "trajectory.dcd", "summary.json",
+                                              "frames.csv")]
         if not all(os.path.isfile(f) for f in files):
             continue
         with open(files[2]) as fh:
@@ -911,21 +927,21 @@ def analyse_sweep(sweep_dir: str, *, crossing_cutoff_nm: float | None = None,
             ext = Extension(s1).run()
             cat = Catenation(s1, s2).run()
             cross = CrossingAngles(s1, s2, cutoff_nm=cutoff).run()
-        start = 0
+        frame_turns = _frame_turns(os.path.join(d, "frames.csv"))
         for pt in summary["points"]:
-            nf = pt["n_frames"]
-            sl = slice(start, start + nf)
-            sel = (cross.results.frame_index >= start) & (cross.results.frame_index < start + nf)
-            eta = cross.results.eta[sel]
+            idx = np.flatnonzero(frame_turns == pt["turns"])
+            nf = int(idx.size)
+            eta = cross.results.eta[np.isin(cross.results.frame_index, idx)]
             rows.append({**{k: p.values[k] for k in keys}, "turns": pt["turns"],
                          "n_frames": nf,
-                         "extension_nm": float(np.mean(ext.results.extension_nm[sl])) if nf else None,
-                         "catenation": float(np.mean(cat.results.catenation[sl])) if nf else None,
+                         "extension_nm": float(np.mean(ext.results.extension_nm[idx]))
+                         if nf else None,
+                         "catenation": float(np.mean(cat.results.catenation[idx]))
+                         if nf else None,
                          "crossings_per_frame": eta.size / nf if nf else None,
                          "mean_abs_crossing_angle_deg":
                              float(np.degrees(np.mean(np.abs(eta)))) if eta.size else None,
                          "point": p.name})
-            start += nf
     if write:
         cols = keys + ["turns", "n_frames", "extension_nm", "catenation", "crossings_per_frame",
                        "mean_abs_crossing_angle_deg", "point"]

@@ -3,7 +3,9 @@
 from __future__ import annotations
 
 import csv
+import glob
 import json
+import math
 import os
 import signal
 import subprocess
@@ -13,12 +15,21 @@ import time
 import pytest
 
 from dnabraid import sweep
-from dnabraid.scenes import SceneError
+from dnabraid.scenes import SceneError, scene_class
 
-# A tiny braid: 13 beads per strand, 7400 steps per point (~0.6 s single-threaded). Faster
-# ramps (turn_rate 5e-4) let the strands pass through each other for some seeds.
+WORKFLOWS = os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))),
+                         "workflows")
+
+# A tiny braid: 13 beads per strand, one replica, 7400 steps per point (~0.6 s
+# single-threaded). Faster ramps (turn_rate 5e-4) let the strands pass through each other
+# for some seeds.
 TINY = {"length_nm": 60, "steps": 1000, "equilibration_steps": 200, "turns": [0, 1],
-        "frame_interval": 500, "report_interval": 100, "turn_rate": 2e-4, "seed": 7}
+        "frame_interval": 500, "report_interval": 100, "turn_rate": 2e-4, "seed": 7,
+        "replicas": 1}
+#: The results.csv header of a tweezer sweep over salt_mM (unchanged since the first sweeps).
+TWEEZER_HEADER = ["salt_mM", "turns", "extension_nm", "extension_sem_nm", "torque_pN_nm",
+                  "torque_sem_pN_nm", "catenation", "catenation_sem", "n_samples", "status",
+                  "error", "point"]
 
 
 def _spec(grid, **fixed):
@@ -81,12 +92,101 @@ def test_spec_file_scene_relative_and_names(tmp_path):
     assert spec.out == os.path.join("runs", "s")
 
 
+def test_spec_toml_round_trip(tmp_path):
+    spec = sweep.load_spec({"scene": "braid", "fixed": {"steps": 1000, "surface": False},
+                            "grid": {"turns": [[0, 1], [0, -1]], "salt_mM": [10, 150.5]}},
+                           out=str(tmp_path / "sw"))
+    path = tmp_path / "again.toml"
+    path.write_text(spec.to_toml())
+    again = sweep.load_spec(str(path))
+    assert (again.scene, again.fixed, again.grid, again.out) == (
+        spec.scene, spec.fixed, spec.grid, spec.out)
+    assert [p.scene for p in again.points] == [p.scene for p in spec.points]
+
+
+@pytest.mark.parametrize("path", sorted(glob.glob(os.path.join(WORKFLOWS, "*.toml"))),
+                         ids=os.path.basename)
+def test_workflow_specs_validate(path):
+    """The sweep specs in workflows/ load and every grid point validates (nothing runs)."""
+    spec = sweep.load_spec(path)
+    assert len(spec.points) >= 2
+    assert spec.out == os.path.join("runs", os.path.splitext(os.path.basename(path))[0])
+
+
 # --------------------------------------------------------------------------------------
-# running
+# gathering: every scene gives a table of its own columns
 # --------------------------------------------------------------------------------------
 def _csv(path):
     with open(path) as fh:
         return list(csv.DictReader(fh))
+
+
+def test_tweezer_table_columns_unchanged(tmp_path):
+    """Points not run yet give one pending row each, under the tweezer header of old."""
+    spec = sweep.load_spec(_spec({"salt_mM": [100, 150]}), out=str(tmp_path / "sw"))
+    os.makedirs(spec.out)
+    rows = sweep.gather(spec)
+    assert spec.columns == TWEEZER_HEADER
+    table = _csv(tmp_path / "sw" / "results.csv")
+    assert list(table[0]) == TWEEZER_HEADER
+    assert [(r["salt_mM"], r["turns"], r["status"]) for r in table] == [
+        ("100", "", "pending"), ("150", "", "pending")]
+    assert [r["extension_nm"] for r in rows] == [None, None]
+
+
+def test_knot_sweep_gives_its_own_table(tmp_path):
+    """Bug: a sweep over the knot scene ran every point and then failed in gather with
+    KeyError: 'points' (gather read the tweezer summary's per-turn points). The table now
+    holds the knot scene's own columns: one row per point, measured against the theory
+    R = sqrt(B / 2T) (Audoly, Clauvelin & Neukirch 2007, Eq. 1)."""
+    spec = {"scene": "knot", "fixed": {"bead_spacing_nm": 1.0},
+            "grid": {"tension_pN": [3.0, 5.0]}}
+    res = sweep.run_sweep(spec, out=str(tmp_path / "knot"), workers=1)
+    assert not res.failed, res.failed
+    rows = _csv(res.table)
+    assert list(rows[0]) == ["tension_pN", *scene_class("knot").row_columns,
+                             "status", "error", "point"]
+    assert [(r["point"], r["status"]) for r in rows] == [("tension_pN=3", "done"),
+                                                         ("tension_pN=5", "done")]
+    for r, tension in zip(rows, (3.0, 5.0)):
+        radius = math.sqrt(1000.0 / (2 * tension))  # B = 1000 pN nm^2 (the default)
+        assert float(r["radius_theory_nm"]) == pytest.approx(radius)
+        # the bead contact pins sliding: the loop stays ~15 % wider than the theory here
+        # (workflows/results/knot_crosscheck.md)
+        assert 1.0 < float(r["radius_apex_nm"]) / radius < 1.3
+        assert float(r["winding_turns"]) == pytest.approx(1.0, abs=0.01)
+        assert r["converged"] == "True"
+    assert os.path.isfile(res.figure)
+    text = sweep.format_table(res.rows, ["tension_pN"])
+    assert "radius_apex_nm" in text.splitlines()[0] and "extension_nm" not in text
+
+
+def test_handedness_analysis_in_the_package():
+    """z(+n) - z(-n) per point and the torque sum Gamma(+n) + Gamma(-n) across seeds."""
+    rows = []
+    for alpha, seed, dz, tsum in [(0.0, 1, 0.5, 4.0), (0.0, 2, -0.5, -2.0),
+                                  (12.0, 1, 16.0, -40.0), (12.0, 2, 18.0, -50.0)]:
+        for n, z, t in ((-2.0, 50.0, -100.0), (2.0, 50.0 + dz, 100.0 + tsum)):
+            rows.append({"alpha": alpha, "seed": seed, "turns": n, "extension_nm": z,
+                         "extension_sem_nm": 0.3, "torque_pN_nm": t, "torque_sem_pN_nm": 9.0,
+                         "status": "done", "error": "", "point": f"alpha={alpha}__seed={seed}"})
+    asym = sweep.asymmetry(rows, ["alpha", "seed"])
+    assert [a["asymmetry_nm"] for a in asym] == pytest.approx([0.5, -0.5, 16.0, 18.0])
+    assert asym[0]["n"] == 2.0 and asym[0]["asymmetry_sem_nm"] == pytest.approx(0.3 * 2**0.5)
+    h = sweep.handedness_across_seeds(rows, 2.0)
+    assert [r["group"] for r in h] == [0.0, 12.0] and [r["seeds"] for r in h] == [2, 2]
+    assert h[0]["torque_sum_pN_nm"] == pytest.approx(1.0)
+    assert h[0]["torque_sum_se_pN_nm"] == pytest.approx(3.0)
+    assert h[1]["torque_sum_pN_nm"] == pytest.approx(-45.0)
+    assert h[1]["t"] == pytest.approx(-9.0)
+    assert h[1]["delta_z_nm"] == pytest.approx(17.0)
+    text = sweep.format_table(rows, ["alpha", "seed"])
+    assert "z(+n) - z(-n)" in text and "16.00 +- 0.42 nm" in text
+
+
+# --------------------------------------------------------------------------------------
+# running
+# --------------------------------------------------------------------------------------
 
 
 def test_local_and_dask_give_identical_tables(tmp_path):
@@ -166,6 +266,7 @@ def test_failing_point_recorded_others_finish(tmp_path):
         saved = json.load(fh)["points"][bad]
     assert saved["status"] == "failed" and saved["error"]["type"] == "SimulationBlowUp"
     rows = _csv(tmp_path / "sw" / "results.csv")
+    assert list(rows[0]) == ["trap_stiffness_pN_nm", *TWEEZER_HEADER[1:]]
     assert [r["status"] for r in rows] == ["done", "done", "failed"]
     assert rows[-1]["error"].startswith("SimulationBlowUp: ")
     assert os.path.isfile(tmp_path / "sw" / bad / "error.txt")

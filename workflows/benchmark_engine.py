@@ -21,8 +21,7 @@ import time
 import openmm
 from openmm import unit as u
 
-from dnabraid.build import build
-from dnabraid.scene import make_scene
+from dnabraid.scenes import make_scene
 
 KEEP_BONDS_ONLY = {"stretch", "link"}
 
@@ -38,7 +37,7 @@ def time_model(model, keep=None, steps=2000, platform="CPU", wca_cutoff=None, dr
             system.removeForce(i)
         elif wca_cutoff and f.getName() == "wca":
             f.setCutoffDistance(wca_cutoff * model.params["diameter_nm"])
-    dt = model.params["time_step_ns"] * 1e3
+    dt = model.timestep.time_step_ns * 1e3
     integ = openmm.BrownianIntegrator(298.15 * u.kelvin, 1 / u.picosecond, dt * u.picoseconds)
     props = {"Threads": "1"} if platform == "CPU" else {}
     ctx = openmm.Context(system, integ, openmm.Platform.getPlatformByName(platform), props)
@@ -75,10 +74,10 @@ def main(argv=None):
         ]
         for name, over, keep, cut in variants:
             s = make_scene("braid", {"length_nm": (n - 1) * b, "bead_spacing_nm": b, **over})
-            m = build(s)
+            m = s.build()
             sec = time_model(m, keep=keep, steps=a.steps, platform=a.platform, wca_cutoff=cut)
             npart = m.system.getNumParticles()
-            dt_ps = m.params["time_step_ns"] * 1e3
+            dt_ps = m.timestep.time_step_ns * 1e3
             row = (f"{'2x' + str(n):>9} {name:<34} {1 / sec:>9.0f} {sec * 1e3:>9.4f} "
                    f"{sec / npart * 1e9:>13.0f} {dt_ps:>7.1f} {dt_ps * 1e-3 / sec:>9.1f}")
             print(row, flush=True)
@@ -86,10 +85,10 @@ def main(argv=None):
         for name, drop in (("plectoneme (twisted)", ()),
                            ("plectoneme, twist+frame removed", TWIST_TERMS)):
             s = make_scene("plectoneme", {"length_nm": (n - 1) * b, "bead_spacing_nm": b})
-            m = build(s)
+            m = s.build()
             sec = time_model(m, steps=a.steps, platform=a.platform, drop=drop)
             npart = m.system.getNumParticles()
-            dt_ps = m.params["time_step_ns"] * 1e3
+            dt_ps = m.timestep.time_step_ns * 1e3
             row = (f"{'1x' + str(n):>9} {name:<34} {1 / sec:>9.0f} {sec * 1e3:>9.4f} "
                    f"{sec / npart * 1e9:>13.0f} {dt_ps:>7.1f} {dt_ps * 1e-3 / sec:>9.1f}")
             print(row, flush=True)

@@ -1,4 +1,4 @@
-"""Error against run time (work-precision) for the bead model's cross-checks (issue 6.3).
+"""Error against run time (work-precision) for the bead model's cross-checks.
 
 A. Zero-temperature braid vs the continuum tweezer braid (dnabraid.crosscheck): the default
    braid geometry (2 x 200 nm, tethers 40 nm, F = 2 pN, n = 2), bead spacing b = 5, 4, 2.5,
@@ -6,7 +6,8 @@ A. Zero-temperature braid vs the continuum tweezer braid (dnabraid.crosscheck): 
    bead model's own contact distance.
 B. Thermal tether vs the exact discrete worm-like chain (dnabraid.continuum.wlc): F = 3 pN,
    L = 25 nm; time step (timestep_safety 0.1 ... 0.9 of the Euler-Maruyama limit) x
-   sampling length; error = |<z> - theory| / theory, with the run's own SEM beside it.
+   sampling length, one replica in this process (the wall time is one trajectory's);
+   error = |<z> - theory| / theory, with the run's own SEM beside it.
 
 Writes workflows/results/convergence.md and convergence.png (error against wall time) and
 names the cheapest settings that reach 1 %, 5 % and 10 %.
@@ -45,30 +46,30 @@ def part_a(spacings):
 
 
 def part_b(safeties, steps_list):
-    from dnabraid.build import build
     from dnabraid.continuum.wlc import discrete_wlc_extension
-    from dnabraid.runner import run_scene
-    from dnabraid.scene import make_scene
+    from dnabraid.scenes import make_scene
 
     rows = []
     for sf in safeties:
         for steps in steps_list:
             s = make_scene("tether", {"force_pN": 3.0, "length_nm": 25.0, "steps": steps,
                                       "equilibration_steps": 20_000, "surface": False, "seed": 7,
-                                      "frame_interval": 10_000, "timestep_safety": sf})
-            p = build(s).params
+                                      "frame_interval": 10_000, "timestep_safety": sf,
+                                      "replicas": 1, "workers": 1})
+            m = s.build()
+            p = m.params
             theory = discrete_wlc_extension(s.force_pN, s.n_beads - 1, s.bead_spacing_nm,
                                             p["kappa_kT"], p["kT_pN_nm"],
                                             stretch_k_pN_per_nm=p["k_bond_pN_per_nm"])["extension_nm"]
             with tempfile.TemporaryDirectory() as tmp:
                 t0 = time.perf_counter()
-                ext = run_scene(s, tmp)["points"][0]["extension_nm"]
+                ext = s.run(tmp, threads=1)["points"][0]["extension_nm"]
                 wall = time.perf_counter() - t0
             rows.append({"check": "tether vs discrete WLC", "setting": f"safety={sf}, steps={steps}",
                          "error": abs(ext["mean"] - theory) / theory, "sem_rel": ext["sem"] / theory,
                          "wall_time_s": wall,
                          "detail": f"<z> {ext['mean']:.3f}+-{ext['sem']:.3f} vs {theory:.3f} nm, "
-                                   f"dt {p['time_step_ns'] * 1e3:.3g} ps"})
+                                   f"dt {m.timestep.time_step_ns * 1e3:.3g} ps"})
             print(rows[-1], flush=True)
     return rows
 
@@ -104,12 +105,10 @@ def main(argv=None) -> int:
     out.parent.mkdir(parents=True, exist_ok=True)
     out.with_suffix(".md").write_text("\n".join(lines) + "\n")
     print("\n".join(lines))
-    import matplotlib
+    from matplotlib.figure import Figure
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    fig, ax = plt.subplots(figsize=(6, 4))
+    fig = Figure(figsize=(6, 4))
+    ax = fig.subplots()
     for name, rows in checks.items():
         ax.errorbar([r["wall_time_s"] for r in rows], [r["error"] for r in rows],
                     yerr=[2 * r["sem_rel"] for r in rows], fmt="o", label=rows[0]["check"])

@@ -1,15 +1,16 @@
 """Open elastic knots in the bead rod (zero temperature) against the continuum theory.
 
-Issue 6, item 1c/1d. For each (n, eps, b) the knot is relaxed (damped Newton,
+For each (n, eps, b) the knot is relaxed (damped Newton,
 dnabraid.knot.relax) twice: from a loose start (loop 1.2 x theory: the knot tightens) and
 from a tight one (0.85 x: it loosens). The discrete contact between beads pins sliding
 (static friction of order P b / (4 h), P the total contact force), so the two ends bracket
 the frictionless equilibrium; the bracket narrows with the bead spacing b.
 
-Compared (theory at R = sqrt(B / 2T), seed 002 Eq. 1):
+Compared (theory at R = sqrt(B / 2T): Audoly, Clauvelin & Neukirch, PRL 2007, Eq. 1):
   * 2 T R^2 / B with R = R_apex (half the loop's width) and R = Delta L / 2 pi  -> 1
-  * braid length l / (2 w_c sqrt(2 h R))  (seed 002, Eq. 7)                     -> 1
-  * wave number k sqrt(sqrt(12) h R)      (seed 001, Eq. 3; long knots n >= 2)  -> 1
+  * braid length l / (2 w_c sqrt(2 h R))  (Audoly, Clauvelin & Neukirch 2007, Eq. 7)  -> 1
+  * wave number k sqrt(sqrt(12) h R)      (Jawed, Dieleman, Audoly & Reis, PRL 2015,
+                                           Eq. 3; long knots n >= 2)              -> 1
 Writes workflows/results/knot_crosscheck.md (+ .json).
 
 Usage: taskset -c 0 python workflows/knot_crosscheck.py [--quick | --long-only --out F]

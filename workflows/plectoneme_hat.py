@@ -31,8 +31,7 @@ import os
 
 import numpy as np
 
-from dnabraid.runner import run_scene
-from dnabraid.scene import make_scene
+from dnabraid.scenes import make_scene
 
 
 def moroz_nelson_ceff(C, A, F, kT):
@@ -47,7 +46,8 @@ def analyse(summary, scene):
     n = np.array([p["turns"] for p in pts])
     tq = np.array([p["twist_torque_pN_nm"]["mean"] for p in pts])
     tq_sem = np.array([p["twist_torque_pN_nm"]["sem"] for p in pts])
-    frac = np.array([p["plectoneme_fraction"] for p in pts])
+    frac = np.array([np.nan if p["plectoneme_fraction"] is None else p["plectoneme_fraction"]
+                     for p in pts])  # None: no frame sampled
     buckled = np.nonzero(frac > 0.5)[0]
     nb = n[buckled[0]] if buckled.size else math.nan
     gamma_b = math.sqrt(2 * kT * A * F)
@@ -76,6 +76,8 @@ def main(argv=None):
     ap.add_argument("--steps", type=int, default=150000)
     ap.add_argument("--equilibration", type=int, default=50000)
     ap.add_argument("--seed", type=int, default=5)
+    ap.add_argument("--replicas", type=int, default=None,
+                    help="independent replicas per turn value (default: the scene's)")
     here = os.path.dirname(os.path.abspath(__file__))
     ap.add_argument("--run", default=None, help="run directory (default results/plectoneme_F..)")
     ap.add_argument("--out", default=os.path.join(here, "results", "plectoneme_hat.txt"))
@@ -83,9 +85,10 @@ def main(argv=None):
     s = make_scene("plectoneme", {
         "force_pN": a.force, "length_nm": a.length,
         "turns": [float(x) for x in a.turns.split(",")], "steps": a.steps,
-        "equilibration_steps": a.equilibration, "frame_interval": 2000, "seed": a.seed})
+        "equilibration_steps": a.equilibration, "frame_interval": 2000, "seed": a.seed,
+        **({"replicas": a.replicas} if a.replicas else {})})
     run = a.run or os.path.join(here, "results", f"plectoneme_F{a.force:g}_L{a.length:g}")
-    summ = run_scene(s, run)
+    summ = s.run(run)
     pts, res = analyse(summ, s)
     lines = [f"# plectoneme scene F = {a.force} pN, L = {a.length} nm, A = {s.persistence_nm} nm, "
              f"C = {s.twist_persistence_nm} nm, {s.salt_mM} mM; run {run}; wall "
