@@ -16,8 +16,9 @@ whole sweep with the scene's message), then run by its scene's ``run`` into
 ``<out>/<point name>`` where the name is built from the point's values
 (``salt_mM=10__force_pN=1``). Points run in local processes
 (:class:`concurrent.futures.ProcessPoolExecutor`, one per usable core, each pinned to one
-core with one OpenMM thread) or, given a scheduler address or a ``dask.distributed.Client``,
-on a Dask cluster.
+core with one OpenMM thread, so a tweezer point runs its replicas one after the other in
+its process) or, given a scheduler address or a ``dask.distributed.Client``, on a Dask
+cluster.
 
 Sweeps are idempotent: a point whose ``summary.json`` exists is not run again, an
 interrupted point resumes from its checkpoints, and a failed point is recorded with its

@@ -1,4 +1,4 @@
-"""Error against mesh/tolerance and wall time for every continuum problem (issue 3).
+"""Error against mesh/tolerance and wall time for every continuum problem.
 
 Each problem module of :mod:`dnabraid.continuum` provides ``convergence_table()``: rows
 with the setting (mesh size or tolerance), the error against an exact solution or a

@@ -60,7 +60,10 @@ def main(argv=None) -> int:
             "winding (turns) | Newton it | max F OpenMM (pN) | wall (s) |")
     lines = [f"# knot cross-check, {time.strftime('%Y-%m-%d %H:%M')}", "",
              f"h = {H_NM} nm, B = {B_PN_NM2} pN nm^2, T = B eps^4 / (2 h^2); tails 1.5 sqrt(B/T);",
-             "contact k = 2000 pN/nm. Theory values are the leading order in eps.", "",
+             "contact k = 2000 pN/nm. Theory values are the leading order in eps: "
+             "R = sqrt(B / 2T) (Audoly, Clauvelin & Neukirch 2007, Eq. 1), "
+             "l_th = 2 w_c sqrt(2 h R) (ibid., Eq. 7), k_th = (sqrt(12) h R)^(-1/2) "
+             "(Jawed, Dieleman, Audoly & Reis 2015, Eq. 3).", "",
              head, "|" + "---|" * 13]
     print(head, flush=True)
     for n, eps, b in cases:

@@ -103,7 +103,7 @@ def main(argv=None):
                      f"{p['twist']['mean']:>6.3f} {p['writhe']['mean']:>6.3f} "
                      f"{p['linking']['mean']:>6.3f} {p['plectoneme_fraction']:>6.2f} "
                      f"{p['plectoneme_length_nm']['mean']:>8.1f}")
-    lines.append(f"C_eff (Moroz-Nelson) = {res['ceff_theory']:.1f} nm; simulated "
+    lines.append(f"C_eff (Moroz & Nelson 1997, Eq. 12) = {res['ceff_theory']:.1f} nm; simulated "
                  + (f"{res['ceff_sim']:.1f} +- {res['ceff_sim_err']:.1f} nm (torque slope below "
                     "buckling)" if "ceff_sim" in res else "n/a (fewer than 2 unbuckled points)"))
     lines.append(f"buckling torque sqrt(2 kT A F) = {res['gamma_b_theory']:.1f} pN nm; simulated "
