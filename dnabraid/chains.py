@@ -185,6 +185,13 @@ class ChainKit:
         chain = self.topology.addChain(id=chain_id)
         return self._add(chain, residue, atom, friction, position, element)
 
+    def add_particles(self, chain_id: str, residue: str, atom: str, friction: float | None,
+                      positions) -> np.ndarray:
+        """Several particles in one chain (a residue each), e.g. twist frame particles."""
+        chain = self.topology.addChain(id=chain_id)
+        return np.array([self._add(chain, residue, atom, friction, p)
+                         for p in np.atleast_2d(positions)], int)
+
     def _add(self, chain, residue, atom, friction, position, element=None) -> int:
         res = self.topology.addResidue(residue, chain)
         self.topology.addAtom(atom, element, res)

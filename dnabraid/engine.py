@@ -157,15 +157,6 @@ class Engine:
         openmm.LocalEnergyMinimizer.minimize(
             self.context, units.force_to_openmm(tolerance_pN), max_iterations)
 
-    def save_state(self, path: str) -> str:
-        """Write positions and parameters to ``path`` (OpenMM XML), atomically."""
-        st = self.context.getState(getPositions=True, getParameters=True)
-        tmp = path + ".tmp"
-        with open(tmp, "w") as fh:
-            fh.write(openmm.XmlSerializer.serialize(st))
-        os.replace(tmp, path)
-        return path
-
     def save_checkpoint(self, path: str) -> str:
         """Write the full state (positions, parameters, random-number state) and the step
         counter to ``path``, atomically (``Context.createCheckpoint``; same platform only)."""
@@ -183,13 +174,6 @@ class Engine:
             raw = fh.read()
         self.step = int.from_bytes(raw[:8], "little")
         self.context.loadCheckpoint(raw[8:])
-
-    def load_state(self, path: str) -> None:
-        with open(path) as fh:
-            st = openmm.XmlSerializer.deserialize(fh.read())
-        self.context.setPositions(st.getPositions())
-        for k, v in st.getParameters().items():
-            self.context.setParameter(k, v)
 
     # -- dynamics ------------------------------------------------------------
     def advance(self, nsteps: int, fail_dir: str | None = None) -> np.ndarray:

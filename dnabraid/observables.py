@@ -9,6 +9,7 @@ in its trap); the runner turns that into :class:`dnabraid.engine.SimulationBlowU
 
 from __future__ import annotations
 
+import abc
 import math
 
 import numpy as np
@@ -22,17 +23,18 @@ __all__ = ["Observable", "Extension", "BeadAngle", "TrapTorque", "Catenation", "
            "TwistTorque", "Plectonemes"]
 
 
-class Observable:
+class Observable(abc.ABC):
     """Base: ``columns`` maps each produced name to its unit and meaning."""
 
     every = "sample"
     columns: dict = {}
 
-    def reset(self, trap_turns: float, pos) -> None:
+    def reset(self, trap_turns: float, pos) -> None:  # noqa: B027 - optional hook
         """Called when a point starts or resumes (stateful observables re-sync)."""
 
-    def __call__(self, pos, ctx: dict, values: dict) -> dict:  # pragma: no cover - abstract
-        raise NotImplementedError
+    @abc.abstractmethod
+    def __call__(self, pos, ctx: dict, values: dict) -> dict:
+        """Values (name -> float) at positions ``pos`` (nm); ``values`` holds earlier ones."""
 
     def check(self, values: dict, ctx: dict) -> str | None:
         """A message if an invariant is broken, else None."""

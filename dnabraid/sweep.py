@@ -194,12 +194,7 @@ def load_spec(spec: str | os.PathLike | dict, *, out: str | None = None) -> Swee
         base_dir, stem = os.getcwd(), "sweep"
     else:
         path = os.fspath(spec)
-        if not os.path.isfile(path):
-            raise FileNotFoundError(f"sweep spec {path!r} does not exist")
-        try:
-            data = tomlio.load(path)
-        except tomlio.TOMLDecodeError as exc:
-            raise SweepError(f"sweep spec {path!r} is not valid TOML: {exc}") from exc
+        data = tomlio.load_file(path, "sweep spec", SweepError)
         base_dir = os.path.dirname(os.path.abspath(path))
         stem = os.path.splitext(os.path.basename(path))[0]
     unknown = sorted(set(data) - _SPEC_KEYS)

@@ -17,13 +17,28 @@ else:  # pragma: no cover
 
 TOMLDecodeError = tomllib.TOMLDecodeError
 
-__all__ = ["TOMLDecodeError", "dumps", "load", "loads", "parse_value", "value"]
+__all__ = ["TOMLDecodeError", "dumps", "load", "load_file", "loads", "parse_value", "value"]
 
 
 def load(path) -> dict:
     """Read the TOML file ``path`` into a dict."""
     with open(path, "rb") as fh:
         return tomllib.load(fh)
+
+
+def load_file(path, what: str, error: type[Exception]) -> dict:
+    """Read the TOML file ``path``: FileNotFoundError if missing, ``error`` if not TOML.
+
+    ``what`` names the file in messages ("scene file", "sweep spec").
+    """
+    import os
+
+    if not os.path.isfile(path):
+        raise FileNotFoundError(f"{what} {os.fspath(path)!r} does not exist")
+    try:
+        return load(path)
+    except TOMLDecodeError as exc:
+        raise error(f"{what} {os.fspath(path)!r} is not valid TOML: {exc}") from exc
 
 
 def loads(text: str) -> dict:

@@ -62,12 +62,7 @@ def make_scene(base: str | os.PathLike = "braid", overrides: dict | None = None)
     if base_s in SCENES:
         cls = SCENES[base_s]
     elif base_s.endswith(".toml") or os.path.sep in base_s:
-        if not os.path.isfile(base_s):
-            raise FileNotFoundError(f"scene file {base_s!r} does not exist")
-        try:
-            data = tomlio.load(base_s)
-        except tomlio.TOMLDecodeError as exc:
-            raise SceneError(f"scene file {base_s!r} is not valid TOML: {exc}") from exc
+        data = tomlio.load_file(base_s, "scene file", SceneError)
         name = data.pop("scene", "braid")
         if name not in SCENES:
             raise SceneError(f"{base_s}: unknown scene {name!r}; built-in scenes are: "

@@ -8,6 +8,7 @@ runner (:mod:`dnabraid.runner`), streaming into the run directory (:mod:`dnabrai
 
 from __future__ import annotations
 
+import abc
 import dataclasses
 import math
 import os
@@ -215,14 +216,15 @@ class TweezerScene(Scene):
         params["alpha_pN"] = self.alpha
         return kit.finish(self, safety=self.timestep_safety, params=params)
 
-    def attach(self, kit: ChainKit) -> dict:  # pragma: no cover - abstract
+    @abc.abstractmethod
+    def attach(self, kit: ChainKit) -> dict:
         """Add strands and attachments to ``kit`` (setting ``kit.attachments`` and, where
         they exist, ``kit.sides``, ``kit.bead_orientation``, ``kit.extra``); return the
         numbers to record in the model's params."""
-        raise NotImplementedError
 
-    def observables(self, model: Model) -> list:  # pragma: no cover - abstract
-        raise NotImplementedError
+    @abc.abstractmethod
+    def observables(self, model: Model) -> list:
+        """The observables of a run, in the order they are computed."""
 
     def schedule(self) -> TurnSchedule:
         return TurnSchedule(self.turns, turn_rate=getattr(self, "turn_rate", None)

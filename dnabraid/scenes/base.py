@@ -10,6 +10,7 @@ scene validates itself when made (:meth:`Scene.from_values`), round-trips throug
 
 from __future__ import annotations
 
+import abc
 import dataclasses
 import math
 from typing import Any, ClassVar
@@ -93,8 +94,10 @@ def _coerce(info: KeyInfo, value: Any):
 
 
 @dataclasses.dataclass(frozen=True)
-class Scene:
-    """Base of every scene. Subclasses set ``name`` and ``help`` and declare keys."""
+class Scene(abc.ABC):
+    """Base of every scene. Subclasses set ``name`` and ``help``, declare keys and implement
+    :meth:`run`, :meth:`report` and :meth:`rows` (abstract: a scene that lacks one cannot be
+    made)."""
 
     name: ClassVar[str] = ""
     help: ClassVar[str] = ""
@@ -139,7 +142,7 @@ class Scene:
             unit = self.keys()[key].unit
             raise SceneError(f"{key}={getattr(self, key)!r}{' ' + unit if unit else ''}: {msg}")
 
-    def validate(self) -> None:
+    def validate(self) -> None:  # noqa: B027 - optional hook
         """Check values and geometry (subclasses extend)."""
 
     # -- TOML ------------------------------------------------------------------------
@@ -159,18 +162,18 @@ class Scene:
         raise SceneError(f"scene {self.name!r} has no Brownian OpenMM model to build; run it "
                          "with `dnabraid run` (Scene.run)")
 
+    @abc.abstractmethod
     def run(self, out: str, *, platform: str = "CPU", threads: int | None = None,
             progress_factory=None) -> dict:
         """Run the scene into the run directory ``out``; return the summary dict."""
-        raise NotImplementedError
 
+    @abc.abstractmethod
     def report(self, summary: dict, out: str, file) -> None:
         """Print the run's result table for a person (the CLI calls this)."""
-        raise NotImplementedError
 
+    @abc.abstractmethod
     def rows(self, summary: dict) -> list[dict]:
         """Sweep rows of one finished run: one dict per result line (column -> value)."""
-        raise NotImplementedError
 
     #: Columns :meth:`rows` fills (after the sweep's grid keys).
     row_columns: ClassVar[tuple] = ()

@@ -89,9 +89,7 @@ class Plectoneme(TurnedScene):
         g = self.twist_persistence_nm * kT / b
         k_frame = FRAME_K_FRACTION * d.k_bond
         side_pos = initial_side_positions(pos, arm)
-        chain = kit.topology.addChain(id="F")
-        sides = np.array([kit._add(chain, "FRM", "F", zeta_frame, side_pos[i])
-                          for i in range(n - 1)], int)
+        sides = kit.add_particles("F", "FRM", "F", zeta_frame, side_pos[: n - 1])
         att = int(c0[-1])
         m = kit.add_particle("M", "BEO", "MO", d.zeta_bead, pos[-1] + np.array([BEAD_ARM_NM,
                                                                                   0.0, 0.0]))

@@ -14,6 +14,7 @@ import dataclasses
 from typing import ClassVar
 
 import numpy as np
+from scipy.spatial import cKDTree
 
 from .. import observables as ob
 from .. import units
@@ -88,9 +89,8 @@ class Tether(TweezerScene):
             if self.surface and np.any(x[1:, 2] <= 0.5 * d.diameter_nm):
                 continue
             if self.self_avoidance and n > gap:
-                r = np.linalg.norm(x[:, None, :] - x[None, :, :], axis=-1)
-                iu = np.triu_indices(len(x), k=gap)
-                if np.min(r[iu]) < 0.8 * d.diameter_nm:
+                pairs = cKDTree(x).query_pairs(0.8 * d.diameter_nm, output_type="ndarray")
+                if np.any(np.abs(pairs[:, 1] - pairs[:, 0]) >= gap):
                     continue
             return x
         return None
