@@ -26,7 +26,7 @@ from ..chains import (
     max_bead_spacing_nm,
     passage_barrier_kT,
 )
-from ..engine import MAX_SEED, Engine, check_platform
+from ..engine import INTEGRATORS, MAX_SEED, Engine, check_platform
 from ..forces.chiral import chiral_force
 from ..protocols import TurnSchedule
 from ..runner import run_schedule
@@ -92,6 +92,9 @@ class TweezerScene(Scene):
                         "initial state (ramped there from 0), no path dependence; 'ramp': up "
                         "and down branches through the turn values (hysteresis)")
     workers: int = key(0, "", "processes running replicas at once; 0 = one per usable core")
+    integrator: str = key("euler", "", "'euler': Euler-Maruyama (OpenMM BrownianIntegrator); "
+                          "'lm': Leimkuhler-Matthews, same cost per step, smaller time-step "
+                          "bias (workflows/results/integrator_bias.md)")
 
     #: The trap's global parameter (None: the bead is not turned).
     trap_parameter: ClassVar[str | None] = None
@@ -179,6 +182,7 @@ class TweezerScene(Scene):
         need(self.protocol in ("independent", "ramp"), "protocol",
              "allowed: 'independent', 'ramp'")
         need(self.workers >= 0, "workers", "must be >= 0 (0 = one per usable core)")
+        need(self.integrator in INTEGRATORS, "integrator", f"allowed: {', '.join(INTEGRATORS)}")
         need(abs(self.alpha) <= 50.0, "alpha",
              "|alpha| must be <= 50 pN (~12 kT/nm; literature estimates are 0.01-1.5 pN, "
              "forcefields/chiral.toml)")
@@ -442,7 +446,8 @@ def _run_replica(scene_dict, r, rdir, platform, threads, progress) -> dict:
     base = make_scene(name, d)
     scene = dataclasses.replace(base, seed=base.replica_seed(r))
     model = scene.build()
-    engine = Engine(model, platform=platform, seed=scene.seed, threads=threads)
+    engine = Engine(model, platform=platform, seed=scene.seed, threads=threads,
+                    integrator=scene.integrator)
     resumed = os.path.isdir(os.path.join(rdir, "checkpoints"))
     os.makedirs(rdir, exist_ok=True)
     ctx = {"trap_parameter": scene.trap_parameter,

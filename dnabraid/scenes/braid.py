@@ -112,5 +112,6 @@ class Braid(TurnedScene):
                                p["zeta_bead_physical_pN_ns_per_nm"])
 
     def default_short_run(self) -> dict:
+        # the default turn rate: 1e-3 turns/step tears the last bond at the bead
         return {"steps": 2000, "equilibration_steps": 500, "turns": [0.0, 1.0],
-                "turn_rate": 1e-3, "frame_interval": 500}
+                "frame_interval": 500}

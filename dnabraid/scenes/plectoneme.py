@@ -178,5 +178,6 @@ class Plectoneme(TurnedScene):
         return pt
 
     def default_short_run(self) -> dict:
+        # the default turn rate: 1e-3 turns/step tears the last bond at the bead
         return {"steps": 2000, "equilibration_steps": 500, "turns": [0.0, 1.0],
-                "turn_rate": 1e-3, "frame_interval": 500}
+                "frame_interval": 500}
