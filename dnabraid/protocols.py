@@ -61,7 +61,8 @@ class TurnSchedule:
     """The tweezer schedule of a scene's turn values.
 
     ``mode = "independent"``: every turn value starts from the initial (equilibrium) state
-    and is ramped there from 0, so points do not depend on each other or on the path;
+    and is ramped there from 0, or, with ``built_start``, from a start the scene builds at
+    that turn value (no ramp), so points do not depend on each other or on the path;
     ``mode = "ramp"``: the up and down branches described in the module docstring (one
     ramp through all values: hysteresis shows as a difference between branches).
 
@@ -74,7 +75,8 @@ class TurnSchedule:
     """
 
     def __init__(self, turns, *, turn_rate: float | None, equilibration_steps: int,
-                 sample_steps: int, report_interval: int, mode: str = "ramp"):
+                 sample_steps: int, report_interval: int, mode: str = "ramp",
+                 built_start: bool = False):
         self.segments: list[Segment] = []
         ri = int(report_interval)
         if mode == "independent":
@@ -82,7 +84,10 @@ class TurnSchedule:
             for t in sorted(float(x) for x in turns):
                 ramp = 0 if turn_rate is None else int(math.ceil(abs(t) / turn_rate))
                 ramp = int(math.ceil(ramp / ri)) * ri
-                self.segments.append(Segment(len(self.segments), None, 0.0, t, ramp,
+                start = 0.0
+                if built_start:  # the scene builds the start at the turn value: no ramp
+                    start, ramp = t, 0
+                self.segments.append(Segment(len(self.segments), None, start, t, ramp,
                                              int(equilibration_steps),
                                              (int(sample_steps) // ri) * ri))
             return

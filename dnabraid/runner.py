@@ -56,7 +56,9 @@ def run_schedule(model, engine: Engine, schedule, observables, out: str, *, ctx:
     ctx : dict
         Context passed to observables (``trap_stiffness``, ``turn_rate``; the runner sets
         ``trap_turns``). ``ctx["trap_parameter"]`` names the trap angle's global parameter
-        (None: the scene does not turn the bead).
+        (None: the scene does not turn the bead). ``ctx["start_positions"]``, a function of
+        the turn value returning positions (nm), builds the start of segments that begin at
+        their own turn value (``start_from`` None and ``start_turns`` != 0).
     progress : callable(int), optional
         Called with the number of steps just taken.
     """
@@ -85,8 +87,18 @@ def run_schedule(model, engine: Engine, schedule, observables, out: str, *, ctx:
             progress(seg.steps)
             log.info("turns=%g loaded from %s", seg.turns, pdir)
             continue
-        start = init if seg.start_from is None else os.path.join(
-            point_dir(out, schedule.segments[seg.start_from]), "state.chk")
+        if seg.start_from is None and seg.start_turns != 0.0:
+            # a point built at its own turn value: its start is made, minimised and saved
+            start = os.path.join(ckdir, f"initial_{seg.tag}.chk")
+            if not os.path.exists(start):
+                engine.load_checkpoint(init)
+                engine.set_positions(ctx["start_positions"](seg.start_turns))
+                engine.set_parameter(trap, TWO_PI * seg.start_turns)
+                engine.minimise()
+                engine.save_checkpoint(start)
+        else:
+            start = init if seg.start_from is None else os.path.join(
+                point_dir(out, schedule.segments[seg.start_from]), "state.chk")
         engine.load_checkpoint(start)
         if os.path.isdir(pdir):
             shutil.rmtree(pdir)  # an interrupted point: run it again from its start

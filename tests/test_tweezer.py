@@ -180,3 +180,22 @@ def test_blow_up_names_step_and_term(tmp_path):
     msg = str(exc.value)
     assert "step" in msg and exc.value.term in m.forces
     assert exc.value.saved and os.path.exists(exc.value.saved)
+
+
+@pytest.mark.parametrize("n", [-3.0, -1.0, 1.0, 2.5])
+def test_braid_start_built_at_its_catenation(n):
+    """The independent protocol builds each braid at its turn value: the two-ply start has
+    Gauss catenation n exactly, bonds of length b (to 3 %) and the attachment chord turned
+    by n turns."""
+    from dnabraid.geometry.curves import catenation_number
+
+    s = make_scene("braid", {"turns": [n]})
+    m = s.build()
+    p = s.start_positions(m, n)
+    c = m.chains
+    assert catenation_number(p[c[0]], p[c[1]]) == pytest.approx(n, abs=1e-3)
+    bl = np.linalg.norm(np.diff(p[c[0]], axis=0), axis=1)
+    assert np.all(np.abs(bl / s.bead_spacing_nm - 1) < 0.03)
+    chord = p[m.attachments[1]] - p[m.attachments[0]]
+    assert math.atan2(chord[1], chord[0]) == pytest.approx(
+        math.remainder(2 * math.pi * n, 2 * math.pi), abs=1e-6)

@@ -235,7 +235,14 @@ class TweezerScene(Scene):
                             if self.trap_parameter else None,
                             equilibration_steps=self.equilibration_steps,
                             sample_steps=self.steps, report_interval=self.report_interval,
-                            mode=self.protocol)
+                            mode=self.protocol, built_start=self.builds_turned_start)
+
+    #: True when :meth:`start_positions` builds a start at any turn value.
+    builds_turned_start: ClassVar[bool] = False
+
+    def start_positions(self, model: Model, turns: float):
+        """Positions (nm) of a start at ``turns`` (scenes with ``builds_turned_start``)."""
+        raise SceneError(f"scene {self.name!r} builds no start at a turn value")
 
     # -- run -----------------------------------------------------------------------------
     def notes(self, model: Model) -> list[str]:
@@ -453,7 +460,8 @@ def _run_replica(scene_dict, r, rdir, platform, threads, progress) -> dict:
     ctx = {"trap_parameter": scene.trap_parameter,
            "trap_stiffness": getattr(scene, "trap_stiffness_pN_nm", None),
            "turn_rate": getattr(scene, "turn_rate", None),
-           "minimise": not model.extra.get("exact_start", False)}
+           "minimise": not model.extra.get("exact_start", False),
+           "start_positions": lambda t: scene.start_positions(model, t)}
     dirs = run_schedule(model, engine, scene.schedule(), scene.observables(model), rdir,
                         ctx=ctx, progress=progress)
     return {"dirs": dirs, "integrator_seed": engine.seed, "resumed": resumed}

@@ -21,7 +21,7 @@ from .. import observables as ob
 from .. import units
 from ..forces import bead_exclusion_force, pull_force, stretch_force, trap_force
 from ._tweezer import TurnedScene, lockup_turns
-from .base import key
+from .base import SceneError, key
 
 
 @dataclasses.dataclass(frozen=True)
@@ -100,6 +100,54 @@ class Braid(TurnedScene):
                 "zeta_bead_physical_pN_ns_per_nm": zeta_phys,
                 "wall_k_pN_per_nm": d.wall_k if self.surface else 0.0,
                 "n_exclusions": n_excl}
+
+    builds_turned_start: ClassVar[bool] = True
+
+    def start_positions(self, model, turns: float) -> np.ndarray:
+        """A braid already at catenation ``turns``: each point starts there (no ramp).
+
+        The strands run as a symmetric two-ply whose half-separation r(u) shrinks from the
+        tethers' s/2 to 0.6 d (just apart at contact) in the middle (u = z/H in [0, 1],
+        r = s/2 - (s/2 - r_c) sin(pi u)) while the chord angle winds
+        phi(u) = 2 pi n (u - sin(2 pi u) / (2 pi)), flat at both ends, so the chord at the
+        top is turned by n turns; the height H is chosen so that each strand's contour is
+        L, and beads are placed every b along it. The bead centre sits above the
+        attachments. The runner then minimises with the trap at n (no strand passage: the
+        excluded volume keeps the catenation), and the replicas' noise does the rest.
+        """
+        n = float(turns)
+        d = model.dna.diameter_nm
+        half = 0.5 * self.tether_separation_nm
+        rc = min(0.6 * d, half)
+        L, nb = self.length_nm, self.n_beads
+        u = np.linspace(0.0, 1.0, 4001)
+        r = half - (half - rc) * np.sin(np.pi * u)
+        phi = 2 * np.pi * n * (u - np.sin(2 * np.pi * u) / (2 * np.pi))
+
+        def strand(H, offset):
+            return np.c_[r * np.cos(phi + offset), r * np.sin(phi + offset), H * u]
+
+        def length(H):
+            return float(np.sum(np.linalg.norm(np.diff(strand(H, 0.0), axis=0), axis=1)))
+
+        if length(0.0) >= L:
+            raise SceneError(f"turns={n:g}: a two-ply of {L} nm strands cannot hold {n:g} "
+                             f"turns at separation {2 * rc:.2f} nm")
+        lo, hi = 0.0, L
+        for _ in range(80):
+            mid = 0.5 * (lo + hi)
+            lo, hi = (mid, hi) if length(mid) < L else (lo, mid)
+        pos = model.positions.copy()
+        for c, off in zip(model.chains, (np.pi, 0.0)):
+            x = strand(lo, off)
+            sarc = np.r_[0.0, np.cumsum(np.linalg.norm(np.diff(x, axis=0), axis=1))]
+            t = np.linspace(0.0, sarc[-1], nb)
+            pos[c] = np.c_[[np.interp(t, sarc, x[:, k]) for k in range(3)]].T
+        att = model.attachments
+        R = self.bead_radius_nm
+        pos[model.extra["bead_center"]] = (pos[att].mean(axis=0)
+                                           + np.array([0.0, 0.0, np.sqrt(R * R - half * half)]))
+        return pos
 
     def observables(self, model) -> list:
         att = model.attachments
