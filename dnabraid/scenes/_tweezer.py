@@ -92,6 +92,11 @@ class TweezerScene(Scene):
                         "initial state (ramped there from 0), no path dependence; 'ramp': up "
                         "and down branches through the turn values (hysteresis)")
     workers: int = key(0, "", "processes running replicas at once; 0 = one per usable core")
+    target_sem_nm: float = key(0.0, "nm", "target standard error of each point's extension; "
+                               "0 = none. Replicas are added (up to max_replicas) until met")
+    target_sem_pN_nm: float = key(0.0, "pN nm", "target standard error of each point's trap "
+                                  "torque; 0 = none")
+    max_replicas: int = key(16, "", "budget: most replicas per point when a target is set")
     integrator: str = key("euler", "", "'euler': Euler-Maruyama (OpenMM BrownianIntegrator); "
                           "'lm': Leimkuhler-Matthews, same cost per step, smaller time-step "
                           "bias (workflows/results/integrator_bias.md)")
@@ -182,6 +187,10 @@ class TweezerScene(Scene):
         need(self.protocol in ("independent", "ramp"), "protocol",
              "allowed: 'independent', 'ramp'")
         need(self.workers >= 0, "workers", "must be >= 0 (0 = one per usable core)")
+        need(self.target_sem_nm >= 0, "target_sem_nm", "must be >= 0 (0 = no target)")
+        need(self.target_sem_pN_nm >= 0, "target_sem_pN_nm", "must be >= 0 (0 = no target)")
+        need(self.replicas <= self.max_replicas <= MAX_REPLICAS, "max_replicas",
+             f"must be in [replicas={self.replicas}, {MAX_REPLICAS}]")
         need(self.integrator in INTEGRATORS, "integrator", f"allowed: {', '.join(INTEGRATORS)}")
         need(abs(self.alpha) <= 50.0, "alpha",
              "|alpha| must be <= 50 pN (~12 kT/nm; literature estimates are 0.01-1.5 pN, "
@@ -253,6 +262,32 @@ class TweezerScene(Scene):
 
     #: Observables whose convergence decides a point's verdict.
     verdict_observables: ClassVar[tuple] = ("extension_nm", "torque_pN_nm")
+    def has_targets(self) -> bool:
+        return self.target_sem_nm > 0 or self.target_sem_pN_nm > 0
+
+    def _targets(self):
+        return [(c, t) for c, t in (("extension_nm", self.target_sem_nm),
+                                    ("torque_pN_nm", self.target_sem_pN_nm)) if t > 0]
+
+    def replicas_needed(self, points: list, R: int) -> int:
+        """Replicas that would bring every point's SEM to its target (the across-replica
+        SEM falls as 1/sqrt(R)); R when there is no target. Convergence is not a target:
+        more replicas cannot fix replicas that are each too short (R-hat stays large)."""
+        need = R
+        for c, target in self._targets():
+            for pt in points:
+                sem = pt.get(c, {}).get("sem")
+                if sem is not None and sem > target:
+                    need = max(need, math.ceil(R * (sem / target) ** 2))
+        return need
+
+    def precision_verdict(self, pt: dict, stopped_by: str) -> dict:
+        """Whether the point met its targets, and what ended its sampling."""
+        met = {c: (pt.get(c, {}).get("sem") is not None and pt[c]["sem"] <= t)
+               for c, t in self._targets()}
+        return {"targets": dict(self._targets()), "met": met,
+                "stopped_by": stopped_by, "n_replicas": pt["n_replicas"]}
+
     def replica_seed(self, r: int) -> int:
         return self.seed * MAX_REPLICAS + r
 
@@ -306,21 +341,36 @@ class TweezerScene(Scene):
         model = self.build()
         rundir.prepare_out_dir(self, out)
         sched = self.schedule()
-        R = self.replicas
-        total = sched.total_steps * R
         obs = self.observables(model)
-        bar = progress_factory(total) if progress_factory else None
-        jobs = [(self.to_dict(), r, os.path.join(out, "replicas", f"r{r:02d}"), platform,
-                 threads) for r in range(R)]
         workers = self.workers or _usable_cores()
-        workers = max(1, min(workers, R)) if platform == "CPU" else 1
-        try:
-            results = _run_jobs(jobs, workers, bar)
-        finally:
-            if bar:
-                bar.close()
+        results: list = []
+        points: list = []
+        R = self.replicas
+        stopped_by = "replicas"
+        while True:
+            # run replicas len(results) .. R-1 (all of them the first time)
+            jobs = [(self.to_dict(), r, os.path.join(out, "replicas", f"r{r:02d}"), platform,
+                     threads) for r in range(len(results), R)]
+            nw = max(1, min(workers, len(jobs))) if platform == "CPU" else 1
+            bar = progress_factory(sched.total_steps * len(jobs)) if progress_factory else None
+            try:
+                results += _run_jobs(jobs, nw, bar)
+            finally:
+                if bar:
+                    bar.close()
+            points = [self.point_summary([reporters.read_point(r["dirs"][k]) for r in results])
+                      for k in range(len(sched))]
+            need = self.replicas_needed(points, R)
+            if need <= R:
+                stopped_by = "target" if self.has_targets() else "replicas"
+                break
+            if R >= self.max_replicas:
+                stopped_by = "budget"
+                break
+            R = min(need, self.max_replicas)
         wall = time.perf_counter() - t0
         resumed = any(r["resumed"] for r in results)
+        total = sched.total_steps * R
         p = model.params
         dt_ns = model.timestep.time_step_ns
         rundir.write_topology(os.path.join(out, "topology.pdb"), model.topology, model.positions)
@@ -328,10 +378,8 @@ class TweezerScene(Scene):
         frame_cols = {k: v for ob in obs if ob.every == "frame" for k, v in ob.columns.items()}
         reporters.combine(out, [d for r in results for d in r["dirs"]], model.topology,
                           dt_ns * 1e3, self.frame_interval, sample_cols, frame_cols)
-        points = []
-        for k in range(len(sched)):
-            points.append(self.point_summary([reporters.read_point(r["dirs"][k])
-                                              for r in results]))
+        for pt in points:
+            pt["precision"] = self.precision_verdict(pt, stopped_by)
         points.sort(key=lambda pt: pt["turns"])
         notes = self.notes(model)
         if resumed:
@@ -380,6 +428,13 @@ class TweezerScene(Scene):
                   file=file)
         print("+- : standard error of the mean across independent replicas (Student-t 95% "
               "intervals in summary.json)", file=file)
+        if self.has_targets():
+            pr = summary["points"][0]["precision"]
+            met = all(all(pt["precision"]["met"].values()) for pt in summary["points"])
+            print(f"precision targets {pr['targets']}: "
+                  + ("met" if met else f"NOT met, the budget of {self.max_replicas} replicas "
+                     "ended")
+                  + f" ({pr['n_replicas']} replicas per point)", file=file)
         print(f"wall time {summary['wall_time_s']:.1f} s on {summary['platform']}; results in "
               f"{out}/", file=file)
 
