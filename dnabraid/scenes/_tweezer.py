@@ -205,8 +205,10 @@ class TweezerScene(Scene):
         if self.stretch == "bonds":
             k_kT = self.stretch_modulus_pN / self.bead_spacing_nm / self.kT
         barrier = passage_barrier_kT(self.bead_spacing_nm, d, k_kT)
+        if barrier >= MIN_PASSAGE_BARRIER_KT:
+            return
         s_kT = None if k_kT is None else self.stretch_modulus_pN / self.kT
-        self.need(barrier >= MIN_PASSAGE_BARRIER_KT, "bead_spacing_nm",
+        self.need(False, "bead_spacing_nm",
                   f"too coarse for the effective DNA diameter {d:.2f} nm at {self.salt_mM} mM "
                   f"salt: strands could pass through each other (barrier {barrier:.1f} kT < "
                   f"{MIN_PASSAGE_BARRIER_KT} kT, bond stretch included). Use bead_spacing_nm "
