@@ -52,7 +52,11 @@ def cmd_run(args) -> int:
     s = scn.make_scene(args.scene, overrides)
     out = args.out or os.path.join("runs", s.name)
     threads = args.threads
-    if args.platform == "CPU" and not args.no_pin and (threads in (None, 1)):
+    # Replicas run in processes that pin themselves to a core each; pin this process only
+    # when everything runs in it (one worker), and then give OpenMM one thread.
+    parallel = min(getattr(s, "workers", 0) or len(os.sched_getaffinity(0)),
+                   getattr(s, "replicas", 1)) > 1
+    if args.platform == "CPU" and not args.no_pin and threads in (None, 1) and not parallel:
         pin_to_one_core()
         threads = 1
 

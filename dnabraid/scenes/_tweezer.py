@@ -351,9 +351,9 @@ class TweezerScene(Scene):
         stopped_by = "replicas"
         while True:
             # run replicas len(results) .. R-1 (all of them the first time)
+            nw = max(1, min(workers, R - len(results))) if platform == "CPU" else 1
             jobs = [(self.to_dict(), r, os.path.join(out, "replicas", f"r{r:02d}"), platform,
-                     threads) for r in range(len(results), R)]
-            nw = max(1, min(workers, len(jobs))) if platform == "CPU" else 1
+                     threads if nw == 1 else 1) for r in range(len(results), R)]
             bar = progress_factory(sched.total_steps * len(jobs)) if progress_factory else None
             try:
                 results += _run_jobs(jobs, nw, bar)
