@@ -144,38 +144,73 @@ class Engine:
         self.model = model
         scene = model.scene
         self.dt_ns = model.timestep.time_step_ns
-        dt_ps = units.ns_to_ps(self.dt_ns)
-        if integrator == "euler":
-            self.integrator = openmm.BrownianIntegrator(
-                scene.temperature_K * u.kelvin, GAMMA_PER_PS / u.picosecond,
-                dt_ps * u.picoseconds)
-        elif integrator == "lm":
-            masses = [model.system.getParticleMass(i).value_in_unit(u.dalton)
-                      for i in range(model.system.getNumParticles())]
-            self.integrator = leimkuhler_matthews_integrator(scene.temperature_K, dt_ps, masses,
-                                                             GAMMA_PER_PS)
-        else:
+        if integrator not in INTEGRATORS:
             raise ValueError(f"integrator must be one of {INTEGRATORS}, got {integrator!r}")
         self.integrator_name = integrator
         self.seed = integrator_seed(seed)
-        self.integrator.setRandomNumberSeed(self.seed)
-        self.integrator.setConstraintTolerance(1e-6)
-        names = available_platforms()
-        if platform not in names:
-            raise PlatformError(f"platform {platform!r} is not available here; available: "
-                             + ", ".join(names))
-        plat = openmm.Platform.getPlatformByName(platform)
-        props = {}
-        if platform == "CPU" and threads:
-            props["Threads"] = str(int(threads))
-        if platform in ("CUDA", "OpenCL"):
-            props["Precision"] = "mixed"
+        check_platform(platform)
         self.platform = platform
-        self.context = openmm.Context(model.system, self.integrator, plat, props)
+        self._props = {}
+        if platform == "CPU" and threads:
+            self._props["Threads"] = str(int(threads))
+        if platform in ("CUDA", "OpenCL"):
+            self._props["Precision"] = "mixed"
+        self._temperature_K = scene.temperature_K
+        self._make_context(self.seed)
         self.context.setPositions(model.positions * u.nanometer)
         self.step = 0
         self._bonds = model.bonds
         self._b = scene.bead_spacing_nm
+
+    def _make_context(self, openmm_seed: int) -> None:
+        dt_ps = units.ns_to_ps(self.dt_ns)
+        if self.integrator_name == "euler":
+            integ = openmm.BrownianIntegrator(self._temperature_K * u.kelvin,
+                                              GAMMA_PER_PS / u.picosecond, dt_ps * u.picoseconds)
+        else:
+            sysm = self.model.system
+            masses = [sysm.getParticleMass(i).value_in_unit(u.dalton)
+                      for i in range(sysm.getNumParticles())]
+            integ = leimkuhler_matthews_integrator(self._temperature_K, dt_ps, masses,
+                                                   GAMMA_PER_PS)
+        integ.setRandomNumberSeed(int(openmm_seed))
+        integ.setConstraintTolerance(1e-6)
+        self.integrator = integ
+        self.context = openmm.Context(self.model.system, integ,
+                                      openmm.Platform.getPlatformByName(self.platform),
+                                      self._props)
+
+    def restart(self, stream: int) -> None:
+        """A fresh Context whose random numbers are stream ``stream`` of this engine's seed.
+
+        OpenMM seeds its generator only when a Context is made (and a checkpoint restores
+        it), so independent points of one run get their own streams this way; the state is
+        then set with :meth:`load_state`. The stream is a hash of (seed, stream): distinct
+        for every point and replica, and the same when a run is resumed.
+        """
+        import numpy as np
+
+        h = int(np.random.SeedSequence([self.seed, int(stream)]).generate_state(1)[0])
+        self._make_context(h % MAX_SEED + 1)
+
+    def save_state(self, path: str) -> str:
+        """Positions and parameters (no random-number state) as OpenMM XML, atomically."""
+        st = self.context.getState(getPositions=True, getParameters=True)
+        tmp = path + ".tmp"
+        with open(tmp, "w") as fh:
+            fh.write(openmm.XmlSerializer.serialize(st))
+        os.replace(tmp, path)
+        return path
+
+    def load_state(self, path: str, step: int = 0) -> None:
+        """Set positions and parameters from :meth:`save_state`'s file; the step counter to
+        ``step``."""
+        with open(path) as fh:
+            st = openmm.XmlSerializer.deserialize(fh.read())
+        self.context.setPositions(st.getPositions())
+        for k, v in st.getParameters().items():
+            self.context.setParameter(k, v)
+        self.step = int(step)
 
     # -- state ---------------------------------------------------------------
     def positions(self) -> np.ndarray:

@@ -1,10 +1,12 @@
 """Run a schedule on an engine: ramp, equilibrate, sample; observables and frames streamed.
 
 :func:`run_schedule` executes every :class:`~dnabraid.protocols.Segment` of a schedule.
-Each segment starts by loading the checkpoint of the segment it starts from (or of the
-minimised initial state), so an interrupted run that is started again continues from
-exactly the same state, random-number generator included, and ends with the same numbers
-as one that was never interrupted (same platform). Finished segments are skipped.
+A segment that follows another loads that segment's checkpoint (positions and the
+random-number state); an independent segment gets a fresh Context with its own random
+stream (:meth:`Engine.restart`, a hash of the seed and the segment's index) and starts
+from the saved initial state. Either way an interrupted run that is started again repeats
+exactly what the uninterrupted one did and ends with the same numbers (same platform).
+Finished segments are skipped.
 """
 
 from __future__ import annotations
@@ -68,11 +70,11 @@ def run_schedule(model, engine: Engine, schedule, observables, out: str, *, ctx:
     every = max(1, s.frame_interval // ri)
     ckdir = os.path.join(out, "checkpoints")
     os.makedirs(ckdir, exist_ok=True)
-    init = os.path.join(ckdir, "initial.chk")
+    init = os.path.join(ckdir, "initial.xml")
     if not os.path.exists(init):
         if ctx.get("minimise", True):
             engine.minimise()
-        engine.save_checkpoint(init)
+        engine.save_state(init)
     sample_cols = {k: v for ob in observables if ob.every == "sample"
                    for k, v in ob.columns.items()}
     frame_cols = {k: v for ob in observables if ob.every == "frame"
@@ -87,19 +89,23 @@ def run_schedule(model, engine: Engine, schedule, observables, out: str, *, ctx:
             progress(seg.steps)
             log.info("turns=%g loaded from %s", seg.turns, pdir)
             continue
-        if seg.start_from is None and seg.start_turns != 0.0:
-            # a point built at its own turn value: its start is made, minimised and saved
-            start = os.path.join(ckdir, f"initial_{seg.tag}.chk")
-            if not os.path.exists(start):
-                engine.load_checkpoint(init)
-                engine.set_positions(ctx["start_positions"](seg.start_turns))
-                engine.set_parameter(trap, TWO_PI * seg.start_turns)
-                engine.minimise()
-                engine.save_checkpoint(start)
+        if seg.start_from is None:
+            # an independent start: its own random stream, from the initial state or from a
+            # start built at its turn value (made, minimised and saved once)
+            engine.restart(seg.index)
+            start = init
+            if seg.start_turns != 0.0:
+                start = os.path.join(ckdir, f"initial_{seg.tag}.xml")
+                if not os.path.exists(start):
+                    engine.load_state(init)
+                    engine.set_positions(ctx["start_positions"](seg.start_turns))
+                    engine.set_parameter(trap, TWO_PI * seg.start_turns)
+                    engine.minimise()
+                    engine.save_state(start)
+            engine.load_state(start)
         else:
-            start = init if seg.start_from is None else os.path.join(
-                point_dir(out, schedule.segments[seg.start_from]), "state.chk")
-        engine.load_checkpoint(start)
+            engine.load_checkpoint(os.path.join(
+                point_dir(out, schedule.segments[seg.start_from]), "state.chk"))
         if os.path.isdir(pdir):
             shutil.rmtree(pdir)  # an interrupted point: run it again from its start
         ctx = dict(ctx, trap_turns=seg.start_turns)
