@@ -33,9 +33,9 @@ class Braid(TurnedScene):
 
     turns: tuple = key((-2.0, -1.0, 0.0, 1.0, 2.0), "turns", "list of bead turn values n "
                        "(catenation imposed by the rotational trap)")
-    steps: int = key(120000, "steps", "sampling steps per turn value and replica (after "
+    steps: int = key(90000, "steps", "sampling steps per turn value and replica (after "
                      "equilibration)")
-    equilibration_steps: int = key(30000, "steps", "equilibration steps after each change "
+    equilibration_steps: int = key(20000, "steps", "equilibration steps after each change "
                                    "of turns (more is cut from the data where it is detected)")
     tether_separation_nm: float = key(40.0, "nm", "distance between the two tether points "
                                       "(surface and bead)")
