@@ -23,7 +23,7 @@ import os
 
 import numpy as np
 
-__all__ = ["PointWriter", "combine", "read_point", "MIN_N_EFF", "mean_sem_entry"]
+__all__ = ["PointWriter", "combine", "read_csv", "read_point", "MIN_N_EFF", "mean_sem_entry"]
 
 #: An autocorrelation-corrected SEM is trusted when the run holds this many correlation times.
 MIN_N_EFF = 20
@@ -101,20 +101,25 @@ class PointWriter:
         return False
 
 
-def _read_csv(path) -> dict:
+def read_csv(path) -> dict:
+    """A run's CSV file as column -> float ndarray (empty cells NaN; text columns such as
+    ``point`` are left out)."""
     with open(path, newline="") as fh:
         rows = list(csv.reader(fh))
     head, body = rows[0], rows[1:]
     out = {}
     for j, name in enumerate(head):
-        out[name] = np.array([float(r[j]) if r[j] != "" else np.nan for r in body])
+        try:
+            out[name] = np.array([float(r[j]) if r[j] != "" else np.nan for r in body])
+        except ValueError:  # a text column
+            pass
     return out
 
 
 def read_point(path: str) -> tuple[dict, dict]:
     """The samples and frames of a finished point: two dicts column -> ndarray."""
-    return (_read_csv(os.path.join(path, "samples.csv")),
-            _read_csv(os.path.join(path, "frames.csv")))
+    return (read_csv(os.path.join(path, "samples.csv")),
+            read_csv(os.path.join(path, "frames.csv")))
 
 
 def mean_sem_entry(x) -> dict:

@@ -555,18 +555,9 @@ def read_frames(out: str, model) -> dict:
 
 
 def read_csv(path) -> dict:
-    import csv
+    from dnabraid.reporters import read_csv as _read
 
-    with open(path, newline="") as fh:
-        rows = list(csv.reader(fh))
-    head, body = rows[0], rows[1:]
-    out = {}
-    for j, h in enumerate(head):
-        try:
-            out[h] = np.array([float(r[j]) if r[j] != "" else np.nan for r in body])
-        except ValueError:  # a text column (the point directory)
-            pass
-    return out
+    return _read(path)
 
 
 def case_scene(case: Case, quick: bool, scale: float):
