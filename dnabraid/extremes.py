@@ -112,7 +112,7 @@ CASES = [
          "the strands passed through each other"),
     Case("6 turns, past lock-up", "braid", {"turns": [0.0, 6.0], "tether_separation_nm": 10.0},
          "refused", "turns=(0.0, 6.0) turns: |turns| must be <="),
-    Case("turns ramped too fast", "braid", {"turns": [0.0, 3.0], "turn_rate": 1e-2,
+    Case("turns ramped too fast", "braid", {"turns": [0.0, 3.0], "turn_rate": 1e-2, "protocol": "ramp",
                                             "trap_stiffness_pN_nm": 200.0}, "stopped",
          "the bead slipped in the rotational trap"),
     Case("alpha 20 pN (strongly chiral)", "braid", {"alpha": 20.0, "turns": [-1.0, 1.0]}),

@@ -11,8 +11,10 @@ Finished segments are skipped.
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import logging
+import math
 import os
 import shutil
 
@@ -97,12 +99,24 @@ def run_schedule(model, engine: Engine, schedule, observables, out: str, *, ctx:
             if seg.start_turns != 0.0:
                 start = os.path.join(ckdir, f"initial_{seg.tag}.xml")
                 if not os.path.exists(start):
+                    try:
+                        built = ctx["start_positions"](seg.start_turns)
+                    except ValueError as exc:  # the scene cannot build it: ramp from 0
+                        log.info("turns=%g: %s; ramping from 0 instead", seg.turns, exc)
+                        built = None
                     engine.load_state(init)
-                    engine.set_positions(ctx["start_positions"](seg.start_turns))
-                    engine.set_parameter(trap, TWO_PI * seg.start_turns)
-                    engine.minimise()
+                    if built is not None:
+                        engine.set_positions(built)
+                        engine.set_parameter(trap, TWO_PI * seg.start_turns)
+                        engine.minimise()
                     engine.save_state(start)
             engine.load_state(start)
+            if seg.start_turns != 0.0 and trap is not None and abs(
+                    engine.context.getParameter(trap) - TWO_PI * seg.start_turns) > 1e-9:
+                # the start could not be built at the turn value: ramp there from 0
+                rate = ctx["turn_rate"]
+                ramp = int(math.ceil(abs(seg.turns) / rate / ri)) * ri
+                seg = dataclasses.replace(seg, start_turns=0.0, ramp_steps=ramp)
         else:
             engine.load_checkpoint(os.path.join(
                 point_dir(out, schedule.segments[seg.start_from]), "state.chk"))

@@ -254,8 +254,9 @@ def test_kill_midway_then_resume(tmp_path):
 
 
 def test_failing_point_recorded_others_finish(tmp_path):
-    # a trap too soft to hold the braid's torque: valid scene, blows up at run time
-    spec = _spec({"trap_stiffness_pN_nm": [20000, 1]})
+    # a trap too soft to hold the braid's torque while the turns are ramped: valid scene,
+    # blows up at run time
+    spec = _spec({"trap_stiffness_pN_nm": [20000, 1]}, protocol="ramp")
     res = sweep.run_sweep(spec, out=str(tmp_path / "sw"), workers=2)
     ok, bad = "trap_stiffness_pN_nm=20000", "trap_stiffness_pN_nm=1"
     assert res.status[ok]["status"] == "done"
