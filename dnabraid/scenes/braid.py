@@ -108,7 +108,7 @@ class Braid(TurnedScene):
 
         The strands run as a symmetric two-ply whose half-separation r(u) shrinks from the
         tethers' s/2 to 0.6 d (just apart at contact) over the braid (u = z/H in [0, 1],
-        r = s/2 - (s/2 - r_c) w(u), w = min(1, 3 sin(pi u))) while the chord angle winds in
+        r = s/2 - (s/2 - r_c) w(u), w the smoothstep of min(1, 3 sin(pi u))) while the chord angle winds in
         proportion to w, flat at both ends, so the chord at the top is turned by n turns; the height H is chosen so that each strand's contour is
         L, and beads are placed every b along it. The bead centre sits above the
         attachments. The runner then minimises with the trap at n (no strand passage: the
@@ -120,7 +120,8 @@ class Braid(TurnedScene):
         rc = min(0.6 * d, half)
         L, nb = self.length_nm, self.n_beads
         u = np.linspace(0.0, 1.0, 4001)
-        w = np.clip(3.0 * np.sin(np.pi * u), 0.0, 1.0)  # 0 at the ends, 1 over the braid
+        t = np.clip(3.0 * np.sin(np.pi * u), 0.0, 1.0)
+        w = t * t * (3.0 - 2.0 * t)  # smooth: 0 at the ends, 1 over the braid
         r = half - (half - rc) * w
         phi = np.r_[0.0, np.cumsum(0.5 * (w[1:] + w[:-1]))]
         phi = 2 * np.pi * n * phi / phi[-1]
