@@ -120,6 +120,15 @@ class SimulationBlowUp(RuntimeError):
         self.term = term
         self.saved = saved
 
+    def __reduce__(self):
+        # replicas run in worker processes: the error must survive pickling back to the
+        # parent (the default reduce drops the keyword-only arguments and the pool hangs)
+        return (_rebuild_blow_up, (str(self), self.step, self.term, self.saved))
+
+
+def _rebuild_blow_up(message, step, term, saved):
+    return SimulationBlowUp(message, step=step, term=term, saved=saved)
+
 
 def available_platforms() -> list[str]:
     return [openmm.Platform.getPlatform(i).getName() for i in range(openmm.Platform.getNumPlatforms())]

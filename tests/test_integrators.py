@@ -74,3 +74,15 @@ def test_restart_gives_each_point_its_own_reproducible_stream():
         ends.append(e.advance(50)[-1].copy())
     assert not np.allclose(ends[0], ends[1])
     np.testing.assert_array_equal(ends[0], ends[2])
+
+
+def test_blow_up_error_survives_pickling():
+    """Replicas run in worker processes: a blow-up must reach the parent intact (the default
+    exception pickling dropped the keyword-only fields, and the pool hung on the TypeError)."""
+    import pickle
+
+    from dnabraid.engine import SimulationBlowUp
+
+    e = SimulationBlowUp("blew up at step 7", step=7, term="stretch", saved="/x/last.xml")
+    e2 = pickle.loads(pickle.dumps(e))
+    assert (str(e2), e2.step, e2.term, e2.saved) == (str(e), 7, "stretch", "/x/last.xml")
