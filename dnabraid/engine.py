@@ -42,8 +42,39 @@ KB_KJ_PER_MOL_K = 0.0083144626181532
 INTEGRATORS = ("euler", "lm")
 
 
+def euler_maruyama_integrator(temperature_K: float, dt_ps: float, masses_amu,
+                              gamma_per_ps: float = 1.0,
+                              noise_sign=(1.0, 1.0, 1.0)) -> openmm.CustomIntegrator:
+    """Overdamped Langevin by Euler-Maruyama as a ``CustomIntegrator``, with signed noise.
+
+    x_{n+1} = x_n + dt mu F(x_n) + sqrt(2 kT mu dt) s xi_n, the scheme of OpenMM's
+    ``BrownianIntegrator`` (same mobility mu = 1 / (m gamma) per particle), with a sign
+    ``s`` per Cartesian component. ``s = (1, -1, 1)`` drives the mirror image (y -> -y) of
+    the trajectory that ``s = (1, 1, 1)`` drives with the same seed: the two members of a
+    mirror-coupled pair (:mod:`dnabraid.analysis.mirror`). The random stream differs from
+    ``BrownianIntegrator``'s, so both members of a pair use this integrator.
+    """
+    integ = openmm.CustomIntegrator(dt_ps)
+    integ.addGlobalVariable("kT", KB_KJ_PER_MOL_K * float(temperature_K))
+    integ.addPerDofVariable("mob", 0.0)
+    integ.addPerDofVariable("sgn", 1.0)
+    integ.addUpdateContextState()
+    integ.addComputePerDof("x", "x + dt*mob*f + sqrt(2*kT*mob*dt)*sgn*gaussian")
+    integ.addConstrainPositions()
+    _set_mobility_and_sign(integ, masses_amu, gamma_per_ps, noise_sign)
+    return integ
+
+
+def _set_mobility_and_sign(integ, masses_amu, gamma_per_ps, noise_sign) -> None:
+    mob = [openmm.Vec3(*(3 * [0.0 if m == 0 else 1.0 / (m * gamma_per_ps)])) for m in masses_amu]
+    integ.setPerDofVariableByName("mob", mob)
+    sg = openmm.Vec3(*(float(c) for c in noise_sign))
+    integ.setPerDofVariableByName("sgn", [sg] * len(mob))
+
+
 def leimkuhler_matthews_integrator(temperature_K: float, dt_ps: float, masses_amu,
-                                   gamma_per_ps: float = 1.0) -> openmm.CustomIntegrator:
+                                   gamma_per_ps: float = 1.0,
+                                   noise_sign=(1.0, 1.0, 1.0)) -> openmm.CustomIntegrator:
     """Overdamped Langevin by the Leimkuhler-Matthews scheme (a ``CustomIntegrator``).
 
     x_{n+1} = x_n + dt mu F(x_n) + sqrt(2 kT mu dt) (xi_n + xi_{n+1}) / 2, with the
@@ -60,6 +91,7 @@ def leimkuhler_matthews_integrator(temperature_K: float, dt_ps: float, masses_am
     integ.addPerDofVariable("mob", 0.0)
     integ.addPerDofVariable("xi_old", 0.0)
     integ.addPerDofVariable("xi", 0.0)
+    integ.addPerDofVariable("sgn", 1.0)
     integ.addGlobalVariable("started", 0.0)
     integ.beginIfBlock("started = 0")
     integ.addComputePerDof("xi_old", "gaussian")
@@ -67,11 +99,10 @@ def leimkuhler_matthews_integrator(temperature_K: float, dt_ps: float, masses_am
     integ.endBlock()
     integ.addUpdateContextState()
     integ.addComputePerDof("xi", "gaussian")
-    integ.addComputePerDof("x", "x + dt*mob*f + sqrt(0.5*kT*mob*dt)*(xi + xi_old)")
+    integ.addComputePerDof("x", "x + dt*mob*f + sqrt(0.5*kT*mob*dt)*sgn*(xi + xi_old)")
     integ.addConstrainPositions()
     integ.addComputePerDof("xi_old", "xi")
-    mob = [openmm.Vec3(*(3 * [0.0 if m == 0 else 1.0 / (m * gamma_per_ps)])) for m in masses_amu]
-    integ.setPerDofVariableByName("mob", mob)
+    _set_mobility_and_sign(integ, masses_amu, gamma_per_ps, noise_sign)
     return integ
 
 
@@ -156,10 +187,18 @@ class Engine:
         if integrator not in INTEGRATORS:
             raise ValueError(f"integrator must be one of {INTEGRATORS}, got {integrator!r}")
         self.integrator_name = integrator
+        #: None: OpenMM's BrownianIntegrator for 'euler'; a sign triple: the signed-noise
+        #: CustomIntegrators (a scene's ``noise_sign``, for mirror-coupled pairs)
+        self.noise_sign = getattr(scene, "noise_sign", None)
         self.seed = integrator_seed(seed)
         check_platform(platform)
         self.platform = platform
         self._props = {}
+        if platform == "CPU" and self.noise_sign is not None:
+            # a mirror-coupled pair must be reproducible to the last bit: with several
+            # threads the CPU platform's force sums depend on thread scheduling (measured:
+            # one replica pair in three started 0.35 nm apart after minimisation)
+            threads = 1
         if platform == "CPU" and threads:
             self._props["Threads"] = str(int(threads))
         if platform in ("CUDA", "OpenCL"):
@@ -173,15 +212,17 @@ class Engine:
 
     def _make_context(self, openmm_seed: int) -> None:
         dt_ps = units.ns_to_ps(self.dt_ns)
-        if self.integrator_name == "euler":
+        if self.integrator_name == "euler" and self.noise_sign is None:
             integ = openmm.BrownianIntegrator(self._temperature_K * u.kelvin,
                                               GAMMA_PER_PS / u.picosecond, dt_ps * u.picoseconds)
         else:
             sysm = self.model.system
             masses = [sysm.getParticleMass(i).value_in_unit(u.dalton)
                       for i in range(sysm.getNumParticles())]
-            integ = leimkuhler_matthews_integrator(self._temperature_K, dt_ps, masses,
-                                                   GAMMA_PER_PS)
+            make = (euler_maruyama_integrator if self.integrator_name == "euler"
+                    else leimkuhler_matthews_integrator)
+            integ = make(self._temperature_K, dt_ps, masses, GAMMA_PER_PS,
+                         noise_sign=self.noise_sign or (1.0, 1.0, 1.0))
         integ.setRandomNumberSeed(int(openmm_seed))
         integ.setConstraintTolerance(1e-6)
         self.integrator = integ

@@ -18,6 +18,8 @@ import math
 import os
 import shutil
 
+import numpy as np
+
 from . import reporters, rundir
 from .engine import Engine
 from .protocols import Segment
@@ -105,10 +107,21 @@ def run_schedule(model, engine: Engine, schedule, observables, out: str, *, ctx:
                         log.info("turns=%g: %s; ramping from 0 instead", seg.turns, exc)
                         built = None
                     engine.load_state(init)
-                    if built is not None:
+                    axis = getattr(s, "mirror_axis", None)
+                    if built is not None and axis is None:
                         engine.set_positions(built)
                         engine.set_parameter(trap, TWO_PI * seg.start_turns)
                         engine.minimise()
+                    elif built is not None:
+                        # the image of a mirror-coupled pair: minimise in the original's
+                        # frame (the minimiser is not mirror-symmetric to round-off), then
+                        # mirror, so that without a chiral term the image starts exactly
+                        # where the original's mirror does
+                        engine.set_positions(_mirrored(built, axis))
+                        engine.set_parameter(trap, -TWO_PI * seg.start_turns)
+                        engine.minimise()
+                        engine.set_positions(_mirrored(engine.positions(), axis))
+                        engine.set_parameter(trap, TWO_PI * seg.start_turns)
                     engine.save_state(start)
             engine.load_state(start)
             if seg.start_turns != 0.0 and trap is not None and abs(
@@ -168,3 +181,10 @@ def run_schedule(model, engine: Engine, schedule, observables, out: str, *, ctx:
         rundir.atomic_write_text(done, json.dumps({"turns": seg.turns, "step": engine.step,
                                                    "frames": w.n_frames}) + "\n")
     return dirs
+
+
+def _mirrored(pos, axis: int):
+    """Positions reflected through the plane normal to ``axis`` (through the origin)."""
+    out = np.array(pos, float, copy=True)
+    out[:, axis] = -out[:, axis]
+    return out

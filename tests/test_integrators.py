@@ -11,7 +11,8 @@ import openmm
 import pytest
 from openmm import unit as u
 
-from dnabraid.engine import GAMMA_PER_PS, KB_KJ_PER_MOL_K, leimkuhler_matthews_integrator
+from dnabraid.engine import (GAMMA_PER_PS, KB_KJ_PER_MOL_K, euler_maruyama_integrator,
+                             leimkuhler_matthews_integrator)
 
 N = 2000          # independent particles
 K = 100.0         # kJ/mol/nm^2
@@ -20,7 +21,7 @@ MASS = 10.0       # amu -> mobility 1 / (m gamma)
 H = 1.0           # dt mu k
 
 
-def _variance(kind: str) -> float:
+def _variance(kind: str, noise_sign=(1.0, 1.0, 1.0)) -> float:
     mu = 1.0 / (MASS * GAMMA_PER_PS)
     dt = H / (mu * K)
     s = openmm.System()
@@ -33,8 +34,12 @@ def _variance(kind: str) -> float:
     if kind == "euler":
         integ = openmm.BrownianIntegrator(T * u.kelvin, GAMMA_PER_PS / u.picosecond, dt)
         integ.setRandomNumberSeed(7)
+    elif kind == "em":
+        integ = euler_maruyama_integrator(T, dt, [MASS] * N, GAMMA_PER_PS, noise_sign=noise_sign)
+        integ.setRandomNumberSeed(7)
     else:
-        integ = leimkuhler_matthews_integrator(T, dt, [MASS] * N, GAMMA_PER_PS)
+        integ = leimkuhler_matthews_integrator(T, dt, [MASS] * N, GAMMA_PER_PS,
+                                               noise_sign=noise_sign)
         integ.setRandomNumberSeed(7)
     ctx = openmm.Context(s, integ, openmm.Platform.getPlatformByName("Reference"))
     ctx.setPositions(np.zeros((N, 3)))
@@ -51,6 +56,14 @@ def test_euler_maruyama_variance_is_biased_by_one_over_one_minus_h_over_2():
     # 40 x 2000 x 3 samples, correlated over ~1/h = 1 step (samples 5 steps apart): rel.
     # sampling error ~ sqrt(2 / 240000) = 0.3 %; tolerance 2 %
     assert _variance("euler") == pytest.approx(exact / (1 - H / 2), rel=0.02)
+
+
+@pytest.mark.parametrize("sign", [(1.0, 1.0, 1.0), (1.0, -1.0, 1.0)])
+def test_signed_noise_euler_maruyama_has_the_same_bias(sign):
+    """The CustomIntegrator Euler-Maruyama used for mirror-coupled pairs samples what
+    OpenMM's BrownianIntegrator does: (kT/k) / (1 - h/2); the noise sign does not matter."""
+    exact = KB_KJ_PER_MOL_K * T / K
+    assert _variance("em", sign) == pytest.approx(exact / (1 - H / 2), rel=0.02)
 
 
 def test_leimkuhler_matthews_variance_is_exact():

@@ -24,6 +24,10 @@ from ._tweezer import TurnedScene, lockup_turns
 from .base import SceneError, key
 
 
+#: values of the ``mirror`` key
+MIRROR_MODES = ("off", "original", "image")
+
+
 @dataclasses.dataclass(frozen=True)
 class Braid(TurnedScene):
     name: ClassVar[str] = "braid"
@@ -39,10 +43,16 @@ class Braid(TurnedScene):
                                    "of turns (more is cut from the data where it is detected)")
     tether_separation_nm: float = key(40.0, "nm", "distance between the two tether points "
                                       "(surface and bead)")
+    mirror: str = key("off", "", "mirror-coupled pairs (variance reduction for handedness "
+                      "asymmetries): 'off'; 'original' or 'image' run the two members of a "
+                      "pair with one seed and negated turn lists: the image starts from and is "
+                      "driven by the y -> -y mirror of the original's start and noise "
+                      "(dnabraid.analysis.mirror)")
 
     def validate(self) -> None:
         super().validate()
         need = self.need
+        need(self.mirror in MIRROR_MODES, "mirror", f"must be one of {MIRROR_MODES}")
         d = self.effective_diameter_nm
         need(self.tether_separation_nm >= d, "tether_separation_nm",
              f"must be >= the effective diameter {d:.2f} nm (the tethers would overlap)")
@@ -103,7 +113,30 @@ class Braid(TurnedScene):
 
     builds_turned_start: ClassVar[bool] = True
 
+    @property
+    def noise_sign(self):
+        """Signs of the Brownian noise per axis (None = OpenMM's BrownianIntegrator): the
+        image of a mirror-coupled pair gets the y -> -y mirror of the original's noise."""
+        return {"off": None, "original": (1.0, 1.0, 1.0), "image": (1.0, -1.0, 1.0)}[self.mirror]
+
+    @property
+    def mirror_axis(self):
+        """1 (y) for the image of a mirror-coupled pair, else None (read by the runner,
+        which minimises the image's start in the original's frame and then mirrors it)."""
+        return 1 if self.mirror == "image" else None
+
     def start_positions(self, model, turns: float) -> np.ndarray:
+        """The built start at ``turns`` (:meth:`built_start`); for the image of a
+        mirror-coupled pair, the y -> -y mirror of the original's start at ``-turns``
+        (the tethers lie on the x axis, so the mirror is a state of the same system, with
+        catenation and bead angle negated)."""
+        if self.mirror == "image":
+            pos = self.built_start(model, -float(turns))
+            pos[:, 1] = -pos[:, 1]
+            return pos
+        return self.built_start(model, turns)
+
+    def built_start(self, model, turns: float) -> np.ndarray:
         """A braid already at catenation ``turns``: each point starts there (no ramp).
 
         The strands run as a symmetric two-ply whose half-separation r(u) shrinks from the
