@@ -21,6 +21,8 @@ import csv
 import math
 import os
 
+import warnings
+
 import numpy as np
 
 __all__ = ["PointWriter", "combine", "read_csv", "read_point", "MIN_N_EFF", "mean_sem_entry"]
@@ -181,7 +183,17 @@ def combine(out: str, point_dirs: list[str], topology, dt_ps: float, frame_inter
 
 def _dcd_frames(path):
     """Yield the frames (nm) of a DCD file one at a time (MDAnalysis' reader)."""
+    import logging
+
+    # the library stays quiet: MDAnalysis announces a missing netCDF4 (AMBER writer, unused
+    # here) when imported, and its DCDReader warns on every read that its timestep copying
+    # will change in 3.0 (MDAnalysis issue 3889; the frames are copied here anyway). The
+    # filter goes in after the import, which installs MDAnalysis' own filters.
+    logging.getLogger("MDAnalysis").setLevel(logging.ERROR)
     from MDAnalysis.coordinates.DCD import DCDReader
+
+    warnings.filterwarnings("ignore", message="DCDReader currently makes independent",
+                            category=DeprecationWarning)
 
     r = DCDReader(path)
     try:
