@@ -98,7 +98,7 @@ def run_schedule(model, engine: Engine, schedule, observables, out: str, *, ctx:
             # start built at its turn value (made, minimised and saved once)
             engine.restart(seg.index)
             start = init
-            if seg.start_turns != 0.0:
+            if seg.start_turns != 0.0 or getattr(s, "builds_zero_start", False):
                 start = os.path.join(ckdir, f"initial_{seg.tag}.xml")
                 if not os.path.exists(start):
                     try:

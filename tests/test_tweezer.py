@@ -199,7 +199,7 @@ def test_braid_start_built_at_its_catenation(n):
     by n turns."""
     from dnabraid.geometry.curves import catenation_number
 
-    s = make_scene("braid", {"turns": [n]})
+    s = make_scene("braid", {"turns": [n], "start_spread": 0.0})
     m = s.build()
     p = s.start_positions(m, n)
     c = m.chains
@@ -209,3 +209,28 @@ def test_braid_start_built_at_its_catenation(n):
     chord = p[m.attachments[1]] - p[m.attachments[0]]
     assert math.atan2(chord[1], chord[0]) == pytest.approx(
         math.remainder(2 * math.pi * n, 2 * math.pi), abs=1e-6)
+
+
+def test_braid_replicas_start_overdispersed():
+    """Replicas' built starts differ (plateau steepness and a bow of the braid axis drawn from
+    each replica's seed) so that R-hat can see a start the run has not forgotten; each start
+    keeps catenation n exactly and the chord turned by n, and the same seed gives the same
+    start (a resumed run rebuilds it)."""
+    import dataclasses
+
+    from dnabraid.geometry.curves import catenation_number
+
+    s = make_scene("braid", {"turns": [1.0]})
+    m = s.build()
+    heights = []
+    for seed in range(64, 72):
+        sr = dataclasses.replace(s, seed=seed)
+        p = sr.start_positions(m, 1.0)
+        c = m.chains
+        assert catenation_number(p[c[0]], p[c[1]]) == pytest.approx(1.0, abs=1e-3)
+        chord = p[m.attachments[1]] - p[m.attachments[0]]
+        assert abs(math.remainder(math.atan2(chord[1], chord[0]), 2 * math.pi)) < 1e-6
+        heights.append(p[m.attachments].mean(axis=0)[2])
+        np.testing.assert_array_equal(p, sr.start_positions(m, 1.0))
+    # the common start (start_spread = 0) is 184.7 nm high; the spread is tens of nm
+    assert np.ptp(heights) > 10.0

@@ -26,6 +26,8 @@ from .base import SceneError, key
 
 #: values of the ``mirror`` key
 MIRROR_MODES = ("off", "original", "image")
+#: largest bow of an overdispersed start's braid axis, as a fraction of the strand length
+MAX_START_BOW = 0.25
 
 
 @dataclasses.dataclass(frozen=True)
@@ -43,6 +45,10 @@ class Braid(TurnedScene):
                                    "of turns (more is cut from the data where it is detected)")
     tether_separation_nm: float = key(40.0, "nm", "distance between the two tether points "
                                       "(surface and bead)")
+    start_spread: float = key(1.0, "", "how far the replicas' built starts differ (0 = all "
+                              "the same; 1 = plateau steepness in [2.5, 6] and a braid-axis "
+                              "bow up to 0.25 L, from each replica's seed): overdispersed "
+                              "starts let R-hat see an unforgotten start")
     mirror: str = key("off", "", "mirror-coupled pairs (variance reduction for handedness "
                       "asymmetries): 'off'; 'original' or 'image' run the two members of a "
                       "pair with one seed and negated turn lists: the image starts from and is "
@@ -53,6 +59,7 @@ class Braid(TurnedScene):
         super().validate()
         need = self.need
         need(self.mirror in MIRROR_MODES, "mirror", f"must be one of {MIRROR_MODES}")
+        need(0.0 <= self.start_spread <= 1.0, "start_spread", "must be in [0, 1]")
         d = self.effective_diameter_nm
         need(self.tether_separation_nm >= d, "tether_separation_nm",
              f"must be >= the effective diameter {d:.2f} nm (the tethers would overlap)")
@@ -112,6 +119,8 @@ class Braid(TurnedScene):
                 "n_exclusions": n_excl}
 
     builds_turned_start: ClassVar[bool] = True
+    #: n = 0 gets a built (overdispersed) start too, not the shared straight one
+    builds_zero_start: ClassVar[bool] = True
 
     @property
     def noise_sign(self):
@@ -148,22 +157,51 @@ class Braid(TurnedScene):
         excluded volume keeps the catenation), and the replicas' noise does the rest.
         """
         n = float(turns)
+        # overdispersed starts (each replica's own, from its seed): the braid's plateau
+        # steepness c and a bow of the braid's axis (amplitude a L sin(pi u) w(u) in a random
+        # direction; at n = 0, a L sin(pi u) across the strands' plane), so that the
+        # replicas' disagreement (R-hat) can reveal a start the run has not forgotten
+        # (Gelman & Rubin 1992 ask for starts overdispersed relative to the target).
+        # start_spread = 0, or a draw whose strands would differ in length by more than
+        # 10 %, gives the common start (c = 3, no bow).
+        rng = np.random.default_rng([int(self.seed), 0xB4A1D])
+        c = 3.0 + self.start_spread * (rng.uniform(2.5, 6.0) - 3.0)
+        a = self.start_spread * rng.uniform(0.0, MAX_START_BOW)
+        psi = rng.uniform(0.0, 2 * np.pi)
+        if a > 0 or c != 3.0:
+            try:
+                pos, spread = self._two_ply(model, n, c, a, psi)
+                if spread <= 0.1:
+                    return pos
+            except SceneError:
+                pass
+        return self._two_ply(model, n, 3.0, 0.0, 0.0)[0]
+
+    def _two_ply(self, model, n, c, a, psi):
+        """Positions of the built start, and the relative spread of its bond lengths."""
         d = model.dna.diameter_nm
         half = 0.5 * self.tether_separation_nm
         rc = min(0.6 * d, half)
         L, nb = self.length_nm, self.n_beads
         u = np.linspace(0.0, 1.0, 4001)
-        t = np.clip(3.0 * np.sin(np.pi * u), 0.0, 1.0)
+        t = np.clip(c * np.sin(np.pi * u), 0.0, 1.0)
         w = t * t * (3.0 - 2.0 * t)  # smooth: 0 at the ends, 1 over the braid
-        r = half - (half - rc) * w
+        r = half - (half - rc) * (w if n != 0.0 else 0.0)
         phi = np.r_[0.0, np.cumsum(0.5 * (w[1:] + w[:-1]))]
         phi = 2 * np.pi * n * phi / phi[-1]
+        if n == 0.0:  # strands apart: a bow across their plane keeps their lengths equal
+            psi = np.pi / 2 if np.cos(psi) >= 0 else -np.pi / 2
+            bow = a * L * np.sin(np.pi * u)
+        else:  # bow the braided part only
+            bow = a * L * np.sin(np.pi * u) * w
 
         def strand(H, offset):
-            return np.c_[r * np.cos(phi + offset), r * np.sin(phi + offset), H * u]
+            return np.c_[r * np.cos(phi + offset) + bow * np.cos(psi),
+                         r * np.sin(phi + offset) + bow * np.sin(psi), H * u]
 
         def length(H):
-            return float(np.sum(np.linalg.norm(np.diff(strand(H, 0.0), axis=0), axis=1)))
+            return max(float(np.sum(np.linalg.norm(np.diff(strand(H, off), axis=0), axis=1)))
+                       for off in (0.0, np.pi))
 
         if length(0.0) >= L:
             raise SceneError(f"turns={n:g}: a two-ply of {L} nm strands cannot hold {n:g} "
@@ -173,16 +211,18 @@ class Braid(TurnedScene):
             mid = 0.5 * (lo + hi)
             lo, hi = (mid, hi) if length(mid) < L else (lo, mid)
         pos = model.positions.copy()
-        for c, off in zip(model.chains, (np.pi, 0.0)):
+        spacing = []
+        for ch, off in zip(model.chains, (np.pi, 0.0)):
             x = strand(lo, off)
             sarc = np.r_[0.0, np.cumsum(np.linalg.norm(np.diff(x, axis=0), axis=1))]
-            t = np.linspace(0.0, sarc[-1], nb)
-            pos[c] = np.c_[[np.interp(t, sarc, x[:, k]) for k in range(3)]].T
+            tt = np.linspace(0.0, sarc[-1], nb)
+            pos[ch] = np.c_[[np.interp(tt, sarc, x[:, k]) for k in range(3)]].T
+            spacing.append(sarc[-1] / (nb - 1))
         att = model.attachments
         R = self.bead_radius_nm
         pos[model.extra["bead_center"]] = (pos[att].mean(axis=0)
                                            + np.array([0.0, 0.0, np.sqrt(R * R - half * half)]))
-        return pos
+        return pos, 1.0 - min(spacing) / max(spacing)
 
     def observables(self, model) -> list:
         att = model.attachments
