@@ -230,21 +230,29 @@ def chiral_parameters(salt_mM: float) -> dict:
 
     Log-linear interpolation in salt between the tabulated values; outside the table the
     nearest entry is used, ``extrapolated`` is True and a :class:`SaltExtrapolationWarning`
-    is emitted (once per salt value). The range of the interaction is the
-    Debye length (:func:`debye_length_nm`), as in the table's ``range_nm``.
+    is emitted (once per salt value). ``range_nm`` is the decay length of the chiral weight,
+    the range of the first helical harmonic of the DNA charge (Kornyshev & Leikin, J. Chem.
+    Phys. 107, 3656 (1997)): 1/sqrt(lambda_D^-2 + (2 pi / H)^2) with lambda_D from
+    :func:`debye_length_nm` and H the table's ``[helix] pitch_nm``
+    (:func:`dnabraid.forces.reference_chiral.chiral_range_nm`), computed at ``salt_mM``
+    whether or not it is tabulated (the table's ``range_nm`` entries are this formula,
+    rounded, for reading).
 
     Returns
     -------
     dict with ``alpha_pN``, ``alpha_min_pN``, ``alpha_max_pN``, ``range_nm``,
     ``extrapolated`` and ``source``.
     """
+    from dnabraid.forces.reference_chiral import chiral_range_nm
+
     if isinstance(salt_mM, bool) or not (isinstance(salt_mM, (int, float))
                                          and math.isfinite(salt_mM) and salt_mM > 0):
         raise ValueError(f"salt_mM must be a positive number (mM), got {salt_mM!r}")
     table = sorted(((float(k), v) for k, v in _table("chiral.toml")["salt"].items()),
                    key=lambda kv: kv[0])
     cs = [c for c, _ in table]
-    out = {"range_nm": debye_length_nm(salt_mM), "extrapolated": not cs[0] <= salt_mM <= cs[-1]}
+    rho = chiral_range_nm(debye_length_nm(salt_mM), _table("chiral.toml")["helix"]["pitch_nm"])
+    out = {"range_nm": rho, "extrapolated": not cs[0] <= salt_mM <= cs[-1]}
     keys = ("alpha_pN", "alpha_min_pN", "alpha_max_pN")
     if salt_mM <= cs[0] or salt_mM >= cs[-1]:
         end, entry = table[0] if salt_mM <= cs[0] else table[-1]

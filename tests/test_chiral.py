@@ -1,9 +1,12 @@
 """The chiral interaction (issue 4): twin, finite differences, mirror, normalisation, sign,
-pair search, apolar fold and cutoff continuity.
+pair search, apolar fold and cutoff continuity; its range (issue 14 item 6).
 
 Tolerances: OpenMM (Reference platform, double) against the numpy twin 1e-9 relative;
 finite differences (central, h = 1e-6 nm) 1e-6 relative; the mirror image flips the sign of
-the energy to 1e-12 relative; the ideal two-ply carries alpha tan(eta/2) to 1 %.
+the energy to 1e-12 relative; the ideal two-ply carries alpha tan(eta/2) to 1 %. The range
+tests compare with kappa_1 = sqrt(lambda_D^-2 + (2 pi / 3.4 nm)^2) computed here from the
+Debye formula (Kornyshev & Leikin 1997; reference_chiral Eq. C6) to 1e-12 (1e-9 through
+OpenMM), and the weight's amplitude with its small-rho/Delta expansion to 1 %.
 """
 
 import math
@@ -11,8 +14,9 @@ import math
 import numpy as np
 import pytest
 from _openmm_eval import openmm_energy_forces
+from scipy import special
 
-from dnabraid import units
+from dnabraid import forcefield, units
 from dnabraid.forcefield import load_toml
 from dnabraid.forces.chiral import (
     HAVE_NUMBA,
@@ -24,6 +28,7 @@ from dnabraid.forces.chiral import (
     pair_terms_numba,
 )
 from dnabraid.forces.reference_chiral import (
+    HELIX_PITCH_NM,
     ChiralKernel,
     chiral_energy_forces,
     pair_allowed,
@@ -201,6 +206,119 @@ def test_weight_vanishes_smoothly_at_cutoff():
     assert np.trapezoid(k.weight(np.hypot(DELTA, v))[0], v) == pytest.approx(1.0, rel=1e-6)
 
 
+# --- the range (issue 14 item 6) ----------------------------------------------------------
+
+#: (salt mM, effective diameter nm of forcefields/dna.toml) at three salts.
+RANGE_SALTS = [(10.0, 15.0), (150.0, 4.9), (1000.0, 2.9)]
+
+
+def kappa_1(salt_mM, pitch_nm=3.4):
+    """sqrt(lambda_D^-2 + g^2), lambda_D = 0.304 nm / sqrt(I/M), g = 2 pi / H (1/nm):
+    the screening of the first helical harmonic (Kornyshev & Leikin 1997)."""
+    lam = 0.304 / math.sqrt(salt_mM / 1000.0)
+    return math.sqrt(lam**-2 + (2.0 * math.pi / pitch_nm) ** 2)
+
+
+@pytest.mark.parametrize("salt,delta", RANGE_SALTS)
+def test_weight_decays_with_first_helical_harmonic(salt, delta):
+    """The weight falls like the Fermi step of length 1/kappa_1 (not lambda_D), is cut at
+    Delta + 6/kappa_1, and the force field reports the same range."""
+    lam = 0.304 / math.sqrt(salt / 1000.0)
+    kap = kappa_1(salt)
+    k = ChiralKernel(delta, lam, calibrate=False)
+    assert k.range == pytest.approx(1.0 / kap, rel=1e-12)
+    assert k.r_c == pytest.approx(delta + 6.0 / kap, rel=1e-12)
+    assert k.r_s == pytest.approx(delta + 4.0 / kap, rel=1e-12)
+    # tail ratio before the switch (r < r_s): the amplitude cancels
+    w1, w3 = k.weight(np.array([delta + 1.0 / kap, delta + 3.0 / kap]))[0]
+    assert w3 / w1 == pytest.approx((1.0 + math.e) / (1.0 + math.e**3), rel=1e-12)
+    assert k.weight(delta + 6.0 / kap + 1e-9)[0] == 0.0 < k.weight(delta + 5.9 / kap)[0]
+    out = forcefield.chiral_parameters(salt)
+    assert out["range_nm"] == pytest.approx(1.0 / kap, rel=1e-12)
+
+
+def test_range_table_matches_the_formula():
+    """chiral.toml's range_nm entries are 1/kappa_1 rounded to 4 digits; its pitch is the
+    kernel's."""
+    table = load_toml("chiral.toml")
+    assert table["helix"]["pitch_nm"] == HELIX_PITCH_NM
+    for key, entry in table["salt"].items():
+        assert entry["range_nm"] == pytest.approx(1.0 / kappa_1(float(key)), abs=6e-5)
+
+
+@pytest.mark.parametrize("salt,delta", RANGE_SALTS)
+def test_amplitude_against_small_range_expansion(salt, delta):
+    """Eq. (C2) by hand: with r = sqrt(Delta^2 + v^2) = Delta + v^2/(2 Delta) - v^4/(8 Delta^3)
+    and v = sqrt(2 Delta rho) x, int f dv = sqrt(2 Delta rho) (I0 + rho/(2 Delta) I1 + ...),
+    I0 = int dx / (1 + e^{x^2}) = sqrt(pi) (1 - sqrt 2) zeta(1/2) and
+    I1 = int x^4 e^{x^2} / (1 + e^{x^2})^2 dx = (3/2) Gamma(3/2) (1 - 2^{-1/2}) zeta(3/2)
+    (integrals over the real line); so A = 1 / that, to O((rho/Delta)^2) and the switch's
+    cut (~0.5 %). With the Debye length as range A would be off by sqrt(lambda_D kappa_1)
+    (12-130 %)."""
+    lam = 0.304 / math.sqrt(salt / 1000.0)
+    rho = 1.0 / kappa_1(salt)
+    i0 = math.sqrt(math.pi) * (1.0 - math.sqrt(2.0)) * special.zeta(0.5)
+    i1 = 1.5 * special.gamma(1.5) * (1.0 - 2.0**-0.5) * special.zeta(1.5)
+    expected = 1.0 / (math.sqrt(2.0 * delta * rho) * (i0 + rho / (2.0 * delta) * i1))
+    assert ChiralKernel(delta, lam, calibrate=False).amplitude == pytest.approx(expected,
+                                                                                rel=0.01)
+
+
+def test_openmm_force_from_debye_length_decays_with_kappa_1():
+    """The scene's call (chiral_force with the Debye length only): one segment pair at
+    braid angle -30 deg, chord perpendicular to both, pulled apart along the chord. Energies
+    at Delta + 1/kappa_1 and Delta + 3/kappa_1 are in the Fermi ratio of kappa_1; beyond
+    Delta + 6/kappa_1 (still inside the old cutoff Delta + 6 lambda_D = 9.6 nm) energy and
+    forces are exactly zero."""
+    lam = 0.304 / math.sqrt(0.15)
+    kap = kappa_1(150.0)
+    eta = math.radians(-30.0)
+    ta = np.array([1.0, 0.0, 0.0])
+    tb = np.array([math.cos(eta), math.sin(eta), 0.0])  # (ta x tb) . z = sin(eta)
+    energies = []
+    for gap in (1.0 / kap, 3.0 / kap, 7.0 / kap):
+        force = chiral_force([np.array([0, 1]), np.array([2, 3])], 2.0, delta_nm=DELTA,
+                             debye_nm=lam, exclude_neighbours=0, subdivisions=1)
+        zb = np.array([0.0, 0.0, DELTA + gap])
+        pos = np.vstack([-ta, ta, zb - tb, zb + tb])
+        e, f = openmm_energy_forces(force, pos)
+        energies.append((e, f))
+    (e1, _), (e3, _), (e7, f7) = energies
+    assert e1 < 0.0  # alpha > 0 favours eta < 0
+    assert e3 / e1 == pytest.approx((1.0 + math.e) / (1.0 + math.e**3), rel=1e-9)
+    assert DELTA + 7.0 / kap < DELTA + 6.0 * lam
+    assert e7 == 0.0 and np.all(f7 == 0.0)
+
+
+def test_default_rules_follow_the_range():
+    """Sample points and neighbour exclusion scale with rho = 1/kappa_1 at 150 mM, b = 3 nm:
+    q = ceil(b / (1.6 sqrt(Delta rho))) = 2, exclusion ceil(pi (Delta + 6 rho) / (2 b)) = 4."""
+    from dnabraid.forces.chiral import default_exclusion
+    from dnabraid.forces.reference_chiral import default_subdivisions
+
+    lam = 0.304 / math.sqrt(0.15)
+    rho = 1.0 / kappa_1(150.0)
+    q = math.ceil(3.0 / (1.6 * math.sqrt(DELTA * rho)))
+    excl = math.ceil(0.5 * math.pi * (DELTA + 6.0 * rho) / 3.0)
+    assert (q, excl) == (2, 4)
+    assert default_subdivisions(3.0, DELTA, lam) == q
+    assert default_exclusion(3.0, DELTA, lam) == excl
+
+
+def test_kernel_pickled_before_the_range_fix_keeps_its_weight():
+    """A kernel pickled without ``range`` decayed with lambda_D and is restored so."""
+    import pickle
+
+    k = ChiralKernel(DELTA, DEBYE, range_nm=DEBYE, calibrate=False)
+    st = dict(k.__dict__)
+    del st["range"], st["pitch"]
+    old = ChiralKernel.__new__(ChiralKernel)
+    old.__setstate__(st)
+    back = pickle.loads(pickle.dumps(old))
+    r = np.linspace(DELTA - 1.0, k.r_c + 1.0, 50)
+    assert np.array_equal(back.weight(r)[0], k.weight(r)[0])
+
+
 def test_pair_search_never_misses_a_pair():
     rng = np.random.default_rng(SEED + 11)
     pts = rng.uniform(0, 40, size=(1500, 3))
@@ -269,7 +387,7 @@ def kernel_scenes(rng):
 
 def compiled(pos, seg, a, b, kern, q, loop):
     grad = np.zeros_like(pos)
-    e = loop(pos, seg, a, b, q, kern.delta, kern.debye, kern.amplitude, kern.r_s, kern.r_c,
+    e = loop(pos, seg, a, b, q, kern.delta, kern.range, kern.amplitude, kern.r_s, kern.r_c,
              kern.eta_on, kern.ncoef, 1.0, grad)
     return e, grad
 

@@ -12,7 +12,11 @@ workflows/results/benchmark_chiral.txt. Times are CPU time of this process
 (``time.process_time``), which other jobs on a shared machine disturb far less than wall
 time; pin it to one core (taskset -c 0).
 
-Usage: python workflows/benchmark_chiral.py [--steps 2000]
+``--range helix`` (default) uses the chiral weight's range rho = 1/sqrt(lambda_D^-2 + g^2)
+(0.446 nm at 150 mM; issue 14 item 6); ``--range debye`` the Debye length (0.785 nm), the
+range before that fix, for comparison (docs/chiral_range.md).
+
+Usage: python workflows/benchmark_chiral.py [--steps 2000] [--range helix|debye] [--out F]
 """
 
 from __future__ import annotations
@@ -30,7 +34,12 @@ from openmm import unit as u
 
 from dnabraid.forcefield import salt_parameters
 from dnabraid.forces.chiral import HAVE_NUMBA, ChiralEvaluator, chiral_force, default_exclusion
-from dnabraid.forces.reference_chiral import ChiralKernel, default_subdivisions, segments_of
+from dnabraid.forces.reference_chiral import (
+    ChiralKernel,
+    chiral_range_nm,
+    default_subdivisions,
+    segments_of,
+)
 from dnabraid.units import PN_NM_IN_KJ_MOL, kT
 
 B_NM = 3.0
@@ -112,11 +121,15 @@ def main(argv=None):
     ap.add_argument("--steps", type=int, default=2000)
     ap.add_argument("--out", default=str(pathlib.Path(__file__).parent / "results"
                                          / "benchmark_chiral.txt"))
+    ap.add_argument("--range", choices=("helix", "debye"), default="helix",
+                    help="decay length of the weight: 1/sqrt(lambda_D^-2 + g^2) (default) or "
+                         "the Debye length (before issue 14 item 6)")
     args = ap.parse_args(argv)
     sp = salt_parameters(SALT_MM)
     delta, lam = sp.diameter_nm, sp.debye_nm
-    qdef = default_subdivisions(B_NM, delta, lam)
-    kernel = ChiralKernel(delta, lam)
+    rho = chiral_range_nm(lam) if args.range == "helix" else lam
+    qdef = default_subdivisions(B_NM, delta, lam, range_nm=rho)
+    kernel = ChiralKernel(delta, lam, range_nm=rho)
     backends = ("numba", "numpy") if HAVE_NUMBA else ("numpy",)
     np_steps = max(50, args.steps // 10)
     rows = []
@@ -128,12 +141,13 @@ def main(argv=None):
             for be in backends:
                 s = base_system(pos, chains, delta)
                 s.addForce(chiral_force(chains, 1.0, delta_nm=delta, debye_nm=lam,
-                                        bead_spacing_nm=B_NM, subdivisions=q, backend=be))
+                                        range_nm=rho, bead_spacing_nm=B_NM, subdivisions=q,
+                                        backend=be))
                 t_all[be], ctx = time_steps(s, pos, args.steps if be == "numba" else np_steps)
                 if be == backends[0]:
                     end = ctx.getState(getPositions=True).getPositions(asNumpy=True)._value
             seg, cid, pic, nseg, ring = segments_of(chains)
-            excl = default_exclusion(B_NM, delta, lam)
+            excl = default_exclusion(B_NM, delta, lam, range_nm=rho)
             for be in backends:
                 ev = ChiralEvaluator(seg, cid, pic, nseg, ring, kernel, excl, q, 2.0, "x",
                                      backend=be)
@@ -146,7 +160,10 @@ def main(argv=None):
                          call["numpy"], call.get("numba", np.nan)))
     head = (f"# chiral term cost per BrownianIntegrator step, OpenMM {openmm.__version__} CPU "
             f"platform Threads=1, {platform.processor() or platform.machine()}\n"
-            f"# 150 mM: Delta = {delta:.2f} nm, lambda_D = {lam:.3f} nm, b = {B_NM} nm, "
+            f"# 150 mM: Delta = {delta:.2f} nm, lambda_D = {lam:.3f} nm, range of the weight "
+            f"rho = {rho:.3f} nm ({args.range}), cutoff r_c = {kernel.r_c:.2f} nm, "
+            f"exclusion {default_exclusion(B_NM, delta, lam, range_nm=rho)} segments, "
+            f"b = {B_NM} nm, "
             f"two-ply eta = -30 deg, {args.steps} steps ({np_steps} with numpy); q = sample "
             f"points per segment (default rule now gives q = {qdef}); pairs = Verlet-list "
             f"candidates (skin 2 nm)\n"

@@ -44,6 +44,10 @@ the bonds + bending + WCA force field (6-12 x with numpy), and 1.6-3.3 x at q = 
 PythonForce costs ~25-50 us per step even when it does nothing (OpenMM calling Python and
 copying the state); that floor is most of the chiral cost of a small braid out of contact
 (the braid scene, 2 x 31 beads: 0.11-0.14 against 0.07 ms per step without the term).
+These numbers were measured with the Debye length as the weight's range (cutoff Delta +
+6 lambda_D); with the range of the first helical harmonic (issue 14 item 6) the cutoff and
+the candidate list shrink while the default q can grow (finer sampling of a narrower
+weight): docs/chiral_range.md has both, measured side by side.
 """
 
 from __future__ import annotations
@@ -56,10 +60,11 @@ import openmm
 
 from ..units import PN_NM_IN_KJ_MOL
 from .reference_chiral import (
-    CUTOFF_DEBYE,
+    CUTOFF_RANGES,
     ETA_ON,
-    SWITCH_DEBYE,
+    SWITCH_RANGES,
     ChiralKernel,
+    chiral_range_nm,
     default_subdivisions,
     pair_allowed,
     segments_of,
@@ -124,14 +129,18 @@ def grid_pairs(points, cutoff):
     return np.concatenate(out_i), np.concatenate(out_j)
 
 
-def default_exclusion(bead_spacing_nm, delta_nm, debye_nm, cutoff_debye=CUTOFF_DEBYE):
+def default_exclusion(bead_spacing_nm, delta_nm, debye_nm, cutoff_ranges=CUTOFF_RANGES, *,
+                      range_nm=None):
     """Segments excluded along one chain: k with k b < pi r_c / 2.
 
     Two points of a chain joined by a half-turn of diameter r_c are pi r_c / 2 apart along
     it; closer pairs along a chain are neighbours on one branch, not two branches facing each
-    other, and would only measure the chain's own bending.
+    other, and would only measure the chain's own bending. r_c = Delta + cutoff_ranges rho,
+    rho = ``range_nm`` (default
+    :func:`~dnabraid.forces.reference_chiral.chiral_range_nm` of ``debye_nm``).
     """
-    r_c = float(delta_nm) + cutoff_debye * float(debye_nm)
+    rho = chiral_range_nm(debye_nm) if range_nm is None else float(range_nm)
+    r_c = float(delta_nm) + cutoff_ranges * rho
     return max(1, math.ceil(0.5 * math.pi * r_c / float(bead_spacing_nm)))
 
 
@@ -216,7 +225,7 @@ def pair_terms_fast(pos, seg, a, b, kernel, q):
 # ---------------------------------------------------------------------------------------------
 
 
-def _pair_loop(pos, seg, a, b, q, delta, debye, amplitude, r_s, r_c, eta_on, ncoef, scale,
+def _pair_loop(pos, seg, a, b, q, delta, rho, amplitude, r_s, r_c, eta_on, ncoef, scale,
                out):
     """Eq. (C1) over candidate segment pairs, one pair and sample point at a time.
 
@@ -232,8 +241,9 @@ def _pair_loop(pos, seg, a, b, q, delta, debye, amplitude, r_s, r_c, eta_on, nco
     a, b : (P,) int64 arrays of candidate segment pairs
     q : int
         Sample points per segment.
-    delta, debye, amplitude, r_s, r_c, eta_on : float
-        Kernel parameters (ChiralKernel attributes of the same names).
+    delta, rho, amplitude, r_s, r_c, eta_on : float
+        Kernel parameters (ChiralKernel attributes of the same names; rho is
+        ``ChiralKernel.range``, the decay length of the weight).
     ncoef : (D,) float64 array
         N(eta) = polyval(ncoef, eta^2).
     scale : float
@@ -247,7 +257,7 @@ def _pair_loop(pos, seg, a, b, q, delta, debye, amplitude, r_s, r_c, eta_on, nco
         Energy per unit alpha (nm), not scaled.
     """
     inv_sw = 1.0 / (r_c - r_s)
-    inv_debye = 1.0 / debye
+    inv_range = 1.0 / rho
     half_pi = 0.5 * math.pi
     inv_ang = 1.0 / (half_pi - eta_on)
     nd = ncoef.shape[0]
@@ -354,8 +364,8 @@ def _pair_loop(pos, seg, a, b, q, delta, debye, amplitude, r_s, r_c, eta_on, nco
                 if not sw > 0.0:
                     continue
                 # distance weight K(r), Eq. (C1)-(C2): Fermi step times the C2 switch
-                f = 1.0 / (1.0 + math.exp((rn - delta) * inv_debye))
-                df = -f * (1.0 - f) * inv_debye
+                f = 1.0 / (1.0 + math.exp((rn - delta) * inv_range))
+                df = -f * (1.0 - f) * inv_range
                 y = (rn - r_s) * inv_sw
                 if y <= 0.0:
                     cs = 1.0
@@ -566,7 +576,7 @@ def pair_terms_numba(pos, seg, a, b, kernel, q):
     grad = np.zeros_like(pos)
     e = _jit(_pair_loop)(pos, np.ascontiguousarray(seg, np.int64),
                          np.ascontiguousarray(a, np.int64), np.ascontiguousarray(b, np.int64),
-                         int(q), kernel.delta, kernel.debye, kernel.amplitude, kernel.r_s,
+                         int(q), kernel.delta, kernel.range, kernel.amplitude, kernel.r_s,
                          kernel.r_c, kernel.eta_on,
                          np.ascontiguousarray(kernel.ncoef, np.float64), 1.0, grad)
     return float(e), grad
@@ -680,7 +690,7 @@ class ChiralEvaluator:
         a, b = self.candidate_pairs(pos)
         k = self.kernel
         if self._kpar is None:
-            self._kpar = (k.delta, k.debye, k.amplitude, k.r_s, k.r_c, k.eta_on,
+            self._kpar = (k.delta, k.range, k.amplitude, k.r_s, k.r_c, k.eta_on,
                           np.ascontiguousarray(k.ncoef, np.float64))
         return _jit(_pair_loop)(pos, self.seg, a, b, self.q, *self._kpar, scale, out)
 
@@ -715,8 +725,8 @@ class ChiralEvaluator:
 
 def chiral_force(chains, alpha_pN, *, delta_nm, debye_nm, exclude_neighbours=None,
                  bead_spacing_nm=None, subdivisions=None, closed=False, skin_nm=2.0,
-                 cutoff_debye=CUTOFF_DEBYE, switch_debye=SWITCH_DEBYE, eta_on_rad=ETA_ON,
-                 name="chiral", backend="auto"):
+                 range_nm=None, cutoff_ranges=CUTOFF_RANGES, switch_ranges=SWITCH_RANGES,
+                 eta_on_rad=ETA_ON, name="chiral", backend="auto"):
     """Chiral interaction alpha tan(eta/2) per unit contact length, as a named PythonForce.
 
     Parameters
@@ -730,8 +740,11 @@ def chiral_force(chains, alpha_pN, *, delta_nm, debye_nm, exclude_neighbours=Non
     delta_nm : float
         Effective diameter Delta (the contact distance of the normalisation).
     debye_nm : float
-        Debye length: the weight decays like exp(-(r - Delta)/lambda_D) and vanishes at
-        r_c = Delta + cutoff_debye lambda_D.
+        Debye length lambda_D of the salt. The weight decays like exp(-(r - Delta)/rho) with
+        the range of the charge pattern's first helical harmonic,
+        rho = 1/sqrt(lambda_D^-2 + (2 pi / 3.4 nm)^2)
+        (:func:`~dnabraid.forces.reference_chiral.chiral_range_nm`; 0.45 nm at 150 mM), and
+        vanishes at r_c = Delta + cutoff_ranges rho.
     exclude_neighbours : int, optional
         Segments on one chain at most this many apart do not interact. Default
         :func:`default_exclusion` (needs ``bead_spacing_nm``).
@@ -740,15 +753,17 @@ def chiral_force(chains, alpha_pN, *, delta_nm, debye_nm, exclude_neighbours=Non
         ``subdivisions``.
     subdivisions : int, optional
         Sample points per segment; default
-        :func:`~dnabraid.forces.reference_chiral.default_subdivisions` (b/q <= sqrt(Delta
-        lambda_D)), or 1 without ``bead_spacing_nm``.
+        :func:`~dnabraid.forces.reference_chiral.default_subdivisions` (b/q <= 1.6
+        sqrt(Delta rho)), or 1 without ``bead_spacing_nm``.
     closed : bool or sequence of bool
         Ring chains.
     skin_nm : float
         Verlet-list skin. 2 nm: in Brownian runs at the default time step a 1 nm skin
         rebuilt the list every ~7-10 steps, 2 nm every ~40 for ~6 % more candidate pairs
-        (workflows/benchmark_chiral.py).
-    cutoff_debye, switch_debye, eta_on_rad : float
+        (workflows/benchmark_chiral.py, with the old 6 lambda_D cutoff).
+    range_nm : float, optional
+        Override of rho (default from ``debye_nm``, see above); for studies only.
+    cutoff_ranges, switch_ranges, eta_on_rad : float
         Shape of the weight and of the angular switch (reference_chiral).
     name : str
         Force name; the global parameter ``<name>_alpha`` holds alpha in kJ/mol/nm.
@@ -770,10 +785,11 @@ def chiral_force(chains, alpha_pN, *, delta_nm, debye_nm, exclude_neighbours=Non
             raise ValueError("chiral_force: give exclude_neighbours or bead_spacing_nm")
         if subdivisions is None:
             subdivisions = (1 if bead_spacing_nm is None
-                            else default_subdivisions(bead_spacing_nm, delta_nm, debye_nm))
+                            else default_subdivisions(bead_spacing_nm, delta_nm, debye_nm,
+                                                      range_nm=range_nm))
         if exclude_neighbours is None:
             exclude_neighbours = default_exclusion(bead_spacing_nm, delta_nm, debye_nm,
-                                                   cutoff_debye)
+                                                   cutoff_ranges, range_nm=range_nm)
     if int(subdivisions) < 1 or int(exclude_neighbours) < 0:
         raise ValueError(f"subdivisions must be >= 1 and exclude_neighbours >= 0, got "
                          f"{subdivisions!r}, {exclude_neighbours!r}")
@@ -784,8 +800,8 @@ def chiral_force(chains, alpha_pN, *, delta_nm, debye_nm, exclude_neighbours=Non
     local = {int(p): k for k, p in enumerate(particles)}
     seg, cid, pic, nseg, ring = segments_of(chains, closed)
     seg_local = np.vectorize(local.__getitem__, otypes=[np.int64])(seg) if len(seg) else seg
-    kernel = ChiralKernel(delta_nm, debye_nm, cutoff_debye=cutoff_debye,
-                          switch_debye=switch_debye, eta_on_rad=eta_on_rad)
+    kernel = ChiralKernel(delta_nm, debye_nm, range_nm=range_nm, cutoff_ranges=cutoff_ranges,
+                          switch_ranges=switch_ranges, eta_on_rad=eta_on_rad)
     parameter = f"{name}_alpha"
     evaluator = ChiralEvaluator(seg_local, cid, pic, nseg, ring, kernel, exclude_neighbours,
                                 subdivisions, skin_nm, parameter, backend=backend)

@@ -18,20 +18,53 @@ by a double sum over pairs of segments (and over ``q`` sample points per segment
 
     E = alpha sum_{a<b} sum_{k,m} (l_a/q)(l_b/q) K(|p_b^m - p_a^k|) G(eta_ab^{km})      (C1)
 
-* K(r) = A f(r) c(r) is a distance weight with f(r) = 1/(1 + exp((r - Delta)/lambda_D))
-  (a Fermi step: flat below the contact distance Delta, decaying like the Debye screening
-  exp(-r/lambda_D) beyond it) and c(r) a C2 switch to zero between r_s = Delta + 4 lambda_D
-  and r_c = Delta + 6 lambda_D. A normalises the weight along a straight partner at distance
-  Delta:  int K(sqrt(Delta^2 + v^2)) dv = 1  (C2).
+* K(r) = A f(r) c(r) is a distance weight with f(r) = 1/(1 + exp((r - Delta)/rho)) (a Fermi
+  step: flat below the contact distance Delta, decaying like exp(-r/rho) beyond it) and c(r)
+  a C2 switch to zero between r_s = Delta + 4 rho and r_c = Delta + 6 rho. A normalises the
+  weight along a straight partner at distance Delta:  int K(sqrt(Delta^2 + v^2)) dv = 1  (C2).
+* The decay length rho is that of the first helical harmonic of the DNA charge pattern
+  (:func:`chiral_range_nm`, Eq. C6), rho = 1/kappa_1 = 1/sqrt(lambda_D^-2 + g^2),
+  g = 2 pi / H, H = 3.4 nm: 0.53 nm at 10 mM, 0.45 nm at 150 mM, 0.27 nm at 1 M (it was the
+  Debye length lambda_D, 3.04-0.30 nm, before issue 14 item 6; docs/chiral_range.md).
 * G(c, s) = (c^2 + s^2) tan(eta'/2) sqrt(cos eta') S(eta') / N(eta') (C3), with c = t_a . t_b,
   s = (t_a x t_b) . d, eta' = atan(s/c) = eta folded into (-pi/2, pi/2) (apolar DNA) and S a
   C2 switch from 1 at |eta'| <= eta_on (60 deg by default) to 0 at |eta'| = pi/2. The factor
   sqrt(cos eta') undoes the geometric fact that the distance between two helices of a two-ply
   grows as r^2 = Delta^2 + u^2 cos(eta) with the offset u along the partner, so
   int K du = 1/sqrt(cos eta) (C4). The facing factor c^2 + s^2 (1 at contact points) makes G
-  vanish where eta is undefined (c = s = 0). N(eta), a quadratic in eta^2 near 0.91, is fitted
+  vanish where eta is undefined (c = s = 0). N(eta), a quadratic in eta^2 near 0.95, is fitted
   at construction so that an ideal uniform two-ply carries alpha tan(eta/2) per unit strand
   length for |eta| <= eta_on (C5; within 0.2 % continuous, 1 % for 0.5 nm beads).
+
+Why rho = 1/kappa_1 (C6)
+------------------------
+Kornyshev & Leikin's mean-field theory of helical molecules (J. Chem. Phys. 107, 3656
+(1997); reviewed in Kornyshev et al., Rev. Mod. Phys. 79, 943 (2007), Sec. III) expands the
+surface charge of each molecule in helical harmonics n (cos n(phi - g z), g = 2 pi / H, H the
+helical pitch). Screened electrostatics (Debye-Hueckel, kappa_D = 1/lambda_D) turns the
+harmonic n of the potential outside a molecule into K_n(kappa_n r) cos n(phi - g z), with
+
+    kappa_n = sqrt(kappa_D^2 + n^2 g^2),                                        (C6)
+
+because Laplace(psi) = kappa_D^2 psi with a z-dependence exp(i n g z) leaves the radial
+equation of the modified Bessel functions with kappa_D^2 + n^2 g^2. The pair energy per unit
+length of two parallel molecules at axis distance R is then a sum of terms
+a_n(R) cos(n Phi) with a_n proportional to K_0(kappa_n R) (Kornyshev & Leikin 1997). The
+n = 0 term does not depend on the molecules' helical structure or its sense: it is the
+achiral, lambda_D-ranged repulsion, here part of the excluded volume. Every chiral effect
+(the torque between tilted molecules, Kornyshev & Leikin, Phys. Rev. E 62, 2576 (2000); the
+braid-handedness preference, Cortini et al., Biophys. J. 101, 875 (2011)) needs n >= 1 and is
+dominated by n = 1 (n = 2 decays with kappa_2 ~ 2 g, twice as fast). So the chiral energy at
+axis distance r falls like K_0(kappa_1 r) ~ sqrt(pi / (2 kappa_1 r)) exp(-kappa_1 r):
+relative to contact, exp(-kappa_1 (r - Delta)) sqrt(Delta / r). The weight keeps the
+exponential, rho = 1/kappa_1, and neglects the algebraic factor sqrt(Delta / r) (> 0.95 at
+r - Delta = rho for every diameter of forcefields/dna.toml; the normalisation (C2)/(C5)
+absorbs what is left at contact) and the tilt's small change of the effective g for
+|eta| <= 60 deg. H = 3.4 nm is the B-DNA helical repeat (10-10.5 bp x 0.33-0.34 nm), the value
+the Kornyshev papers use. The equation numbers of these papers were not checked here (not at
+hand); the statement (C6) is their standard result. alpha stays defined at the reference
+distance Delta (C2, C5); the bead model's strands sit farther apart (WCA contact ~2^(1/6)
+Delta), where the shorter range leaves less of alpha: docs/chiral_range.md.
 
 Everything here is brute force over all segment pairs: it is the oracle for the pair search
 and the OpenMM force in :mod:`dnabraid.forces.chiral`, which share :func:`pair_terms`.
@@ -45,12 +78,31 @@ import numpy as np
 from scipy import integrate
 from scipy.special import expit
 
-#: r_c = Delta + CUTOFF_DEBYE lambda_D: the weight is exactly zero beyond.
-CUTOFF_DEBYE = 6.0
-#: The distance switch starts at r_s = Delta + SWITCH_DEBYE lambda_D.
-SWITCH_DEBYE = 4.0
+#: r_c = Delta + CUTOFF_RANGES rho: the weight is exactly zero beyond (rho = chiral_range_nm).
+CUTOFF_RANGES = 6.0
+#: The distance switch starts at r_s = Delta + SWITCH_RANGES rho.
+SWITCH_RANGES = 4.0
+#: Helical pitch H of B-DNA (nm): the wavenumber of the charge pattern is g = 2 pi / H
+#: (forcefields/chiral.toml [helix] pitch_nm; tested equal).
+HELIX_PITCH_NM = 3.4
 #: Folded braid angle at which the angular switch starts (rad).
 ETA_ON = math.pi / 3.0
+
+
+def chiral_range_nm(debye_nm, pitch_nm=HELIX_PITCH_NM):
+    """Decay length rho = 1/kappa_1 = 1/sqrt(lambda_D^-2 + g^2) of the chiral weight (nm).
+
+    Eq. (C6) of the module docstring: the first helical harmonic of the DNA charge pattern
+    (Kornyshev & Leikin, J. Chem. Phys. 107, 3656 (1997); Kornyshev et al., Rev. Mod. Phys.
+    79, 943 (2007)), g = 2 pi / ``pitch_nm``. Shorter than both lambda_D and 1/g = 0.54 nm.
+    """
+    debye = float(debye_nm)
+    pitch = float(pitch_nm)
+    if not (debye > 0 and pitch > 0 and math.isfinite(debye) and math.isfinite(pitch)):
+        raise ValueError(f"chiral_range_nm: debye_nm and pitch_nm must be finite and > 0, got "
+                         f"{debye_nm!r}, {pitch_nm!r}")
+    g = 2.0 * math.pi / pitch
+    return 1.0 / math.sqrt(debye**-2 + g * g)
 
 
 def _smootherstep(x):
@@ -69,26 +121,43 @@ class ChiralKernel:
     delta_nm : float
         Effective diameter Delta (contact distance).
     debye_nm : float
-        Debye length lambda_D: the range of the weight.
-    cutoff_debye, switch_debye : float
-        r_c = Delta + cutoff_debye lambda_D, r_s = Delta + switch_debye lambda_D.
+        Debye length lambda_D of the salt.
+    range_nm : float, optional
+        Decay length rho of the weight. Default :func:`chiral_range_nm` of ``debye_nm`` and
+        ``pitch_nm`` (Eq. C6); give it only to study another range.
+    pitch_nm : float
+        Helical pitch H in Eq. (C6).
+    cutoff_ranges, switch_ranges : float
+        r_c = Delta + cutoff_ranges rho, r_s = Delta + switch_ranges rho.
     eta_on_rad : float
         The angular switch S(eta') starts at |eta'| = eta_on (< pi/2).
+
+    Attributes
+    ----------
+    delta, debye, pitch, range, r_s, r_c, eta_on, amplitude, ncoef
+        Delta, lambda_D, H, rho (nm), the switch and cutoff distances (nm), eta_on (rad),
+        A (1/nm) of Eq. (C2) and the coefficients of N(eta) (polyval in eta^2).
     """
 
-    def __init__(self, delta_nm, debye_nm, *, cutoff_debye=CUTOFF_DEBYE,
-                 switch_debye=SWITCH_DEBYE, eta_on_rad=ETA_ON, calibrate=True):
+    def __init__(self, delta_nm, debye_nm, *, range_nm=None, pitch_nm=HELIX_PITCH_NM,
+                 cutoff_ranges=CUTOFF_RANGES, switch_ranges=SWITCH_RANGES, eta_on_rad=ETA_ON,
+                 calibrate=True):
         self.delta = float(delta_nm)
         self.debye = float(debye_nm)
         if not (self.delta > 0 and self.debye > 0):
             raise ValueError(f"delta_nm and debye_nm must be > 0, got {delta_nm!r}, {debye_nm!r}")
-        if not 0 < switch_debye < cutoff_debye:
-            raise ValueError("need 0 < switch_debye < cutoff_debye, got "
-                             f"{switch_debye!r}, {cutoff_debye!r}")
+        self.pitch = float(pitch_nm)
+        self.range = (chiral_range_nm(self.debye, self.pitch) if range_nm is None
+                      else float(range_nm))
+        if not (self.range > 0 and math.isfinite(self.range)):
+            raise ValueError(f"range_nm must be finite and > 0, got {range_nm!r}")
+        if not 0 < switch_ranges < cutoff_ranges:
+            raise ValueError("need 0 < switch_ranges < cutoff_ranges, got "
+                             f"{switch_ranges!r}, {cutoff_ranges!r}")
         if not 0 <= eta_on_rad < math.pi / 2:
             raise ValueError(f"eta_on_rad must lie in [0, pi/2), got {eta_on_rad!r}")
-        self.r_c = self.delta + cutoff_debye * self.debye
-        self.r_s = self.delta + switch_debye * self.debye
+        self.r_c = self.delta + cutoff_ranges * self.range
+        self.r_s = self.delta + switch_ranges * self.range
         self.eta_on = float(eta_on_rad)
         self.amplitude = 1.0
         # Eq. (C2): int_{-inf}^{inf} K(sqrt(Delta^2 + v^2)) dv = 1.
@@ -100,12 +169,19 @@ class ChiralKernel:
         if calibrate:
             self._calibrate()
 
+    def __setstate__(self, st):
+        # A kernel pickled before issue 14 item 6 has no ``range``: it decayed with the Debye
+        # length, and a restored copy keeps that weight (its amplitude and N were fitted to it).
+        st.setdefault("range", st["debye"])
+        st.setdefault("pitch", HELIX_PITCH_NM)
+        self.__dict__.update(st)
+
     def weight(self, r):
         """K(r) and dK/dr (1/nm, 1/nm^2)."""
         r = np.asarray(r, float)
-        x = (r - self.delta) / self.debye
+        x = (r - self.delta) / self.range
         f = expit(-x)
-        df = -f * (1.0 - f) / self.debye
+        df = -f * (1.0 - f) / self.range
         c, dc = _smootherstep((r - self.r_s) / (self.r_c - self.r_s))
         dc = dc / (self.r_c - self.r_s)
         return self.amplitude * f * c, self.amplitude * (df * c + f * dc)
@@ -348,21 +424,23 @@ def pair_terms(pos, seg, a, b, kernel, q, r_cut=None):
     return e, grad
 
 
-def default_subdivisions(bead_spacing_nm, delta_nm, debye_nm):
-    """Sample points per segment so that the sample spacing b/q <= 1.6 sqrt(Delta lambda_D).
+def default_subdivisions(bead_spacing_nm, delta_nm, debye_nm, *, range_nm=None):
+    """Sample points per segment so that the sample spacing b/q <= 1.6 sqrt(Delta rho).
 
-    Along a partner strand the weight is close to a Gaussian of width w = sqrt(Delta lambda_D)
-    in the offset u; a sum over samples spaced by h reproduces the integral to
-    ~2 exp(-2 pi^2 w^2 / h^2) (Poisson summation), <= 1e-3 for h <= 1.6 w, so the energy
-    carries (almost) no corrugation from how the beads of two strands line up.
+    Along a partner strand the weight is close to a Gaussian of width w = sqrt(Delta rho) in
+    the offset u (rho = ``range_nm``, default :func:`chiral_range_nm` of ``debye_nm``); a sum
+    over samples spaced by h reproduces the integral to ~2 exp(-2 pi^2 w^2 / h^2) (Poisson
+    summation), <= 1e-3 for h <= 1.6 w, so the energy carries (almost) no corrugation from
+    how the beads of two strands line up.
     """
-    width = 1.6 * math.sqrt(float(delta_nm) * float(debye_nm))
+    rho = chiral_range_nm(debye_nm) if range_nm is None else float(range_nm)
+    width = 1.6 * math.sqrt(float(delta_nm) * rho)
     return max(1, math.ceil(float(bead_spacing_nm) / width - 1e-9))
 
 
 def chiral_energy_forces(positions_nm, chains, alpha_pN, *, delta_nm, debye_nm,
-                         exclude_neighbours, subdivisions=1, closed=False,
-                         cutoff_debye=CUTOFF_DEBYE, switch_debye=SWITCH_DEBYE,
+                         exclude_neighbours, subdivisions=1, closed=False, range_nm=None,
+                         cutoff_ranges=CUTOFF_RANGES, switch_ranges=SWITCH_RANGES,
                          eta_on_rad=ETA_ON):
     """Chiral energy (pN nm) and forces (pN) by brute force over all segment pairs.
 
@@ -375,13 +453,16 @@ def chiral_energy_forces(positions_nm, chains, alpha_pN, *, delta_nm, debye_nm,
         alpha, energy per unit contact length (pN nm / nm = pN). alpha > 0 favours eta < 0,
         i.e. right-handed braids (docs/chirality.md).
     delta_nm, debye_nm : float
-        Effective diameter and Debye length.
+        Effective diameter and Debye length (the weight decays with
+        :func:`chiral_range_nm` of it, Eq. C6).
     exclude_neighbours : int
         Segments on the same chain at most this many segments apart do not interact.
     subdivisions : int
         Sample points per segment (q in Eq. C1).
     closed : bool or sequence of bool
         Ring chains.
+    range_nm, cutoff_ranges, switch_ranges, eta_on_rad
+        Passed to :class:`ChiralKernel`.
 
     Returns
     -------
@@ -389,8 +470,8 @@ def chiral_energy_forces(positions_nm, chains, alpha_pN, *, delta_nm, debye_nm,
     forces_pN : (N, 3) float array
     """
     pos = np.asarray(positions_nm, float)
-    kernel = ChiralKernel(delta_nm, debye_nm, cutoff_debye=cutoff_debye,
-                          switch_debye=switch_debye, eta_on_rad=eta_on_rad)
+    kernel = ChiralKernel(delta_nm, debye_nm, range_nm=range_nm, cutoff_ranges=cutoff_ranges,
+                          switch_ranges=switch_ranges, eta_on_rad=eta_on_rad)
     seg, cid, pic, nseg, ring = segments_of(chains, closed)
     a, b = np.triu_indices(len(seg), 1)
     keep = pair_allowed(a, b, cid, pic, nseg, ring, int(exclude_neighbours))
