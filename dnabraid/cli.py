@@ -3,7 +3,7 @@
     dnabraid run [SCENE | SCENE.toml] [--set KEY=VALUE]... [--out DIR] [--platform NAME] [--seed N]
     dnabraid scenes
     dnabraid sweep SPEC.toml [--workers N] [--scheduler ADDRESS] [--out DIR]
-    dnabraid continuum ply|knot|overhand|tweezer [options] [--json]
+    dnabraid continuum ply|knot|overhand|tweezer|closed [options] [--json]
 """
 
 from __future__ import annotations
@@ -164,7 +164,7 @@ def build_parser() -> argparse.ArgumentParser:
     try:
         from .continuum import cli as ccli
 
-        c = sub.add_parser("continuum", help="rod-theory equilibria (ply, knot, overhand, tweezer)")
+        c = sub.add_parser("continuum", help="rod-theory equilibria (ply, knot, overhand, tweezer, closed)")
         ccli.add_subparsers(c)
         c.set_defaults(func=cmd_continuum)
     except ImportError:  # pragma: no cover - continuum CLI not available

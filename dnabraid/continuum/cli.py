@@ -1,8 +1,8 @@
-"""``dnabraid continuum ply|knot|overhand|tweezer``: the CLI of the continuum module.
+"""``dnabraid continuum ply|knot|overhand|tweezer|closed``: the CLI of the continuum module.
 
-Each problem lives in its own module (``ply``, ``knot``, ``overhand``, ``tweezer``) that
-provides ``cli_add_arguments(parser)`` and ``cli_run(args) -> dict``; this module only
-dispatches. Modules are imported lazily so ``dnabraid --help`` stays fast.
+Each problem lives in its own module (``ply``, ``knot``, ``overhand``, ``tweezer``,
+``closed``) that provides ``cli_add_arguments(parser)`` and ``cli_run(args) -> dict``; this
+module only dispatches. Modules are imported lazily so ``dnabraid --help`` stays fast.
 """
 
 from __future__ import annotations
@@ -19,6 +19,8 @@ PROBLEMS = {
     "overhand": ("overhand", "long overhand knots: helical braid, loop elastica g, master "
                              "curve (seed 001)"),
     "tweezer": ("tweezer", "two molecules braided in magnetic tweezers: z(n), torque(n)"),
+    "closed": ("closed", "closed two-ply (torus links and knots): uniform, axis-curvature "
+                         "correction, relaxed equilibrium (seed 000, slides 19-23)"),
 }
 
 
