@@ -15,11 +15,12 @@ import os
 import sys
 
 from . import scenes as scn
+from .continuum._validate import InputError
 from .engine import PlatformError, pin_to_one_core
 from .rundir import RunDirError
 
 #: Errors that are the user's input, printed without a traceback (anything else is a bug).
-USER_ERRORS = (scn.SceneError, RunDirError, PlatformError, FileNotFoundError)
+USER_ERRORS = (scn.SceneError, RunDirError, PlatformError, FileNotFoundError, InputError)
 
 
 def _parse_sets(items) -> dict:

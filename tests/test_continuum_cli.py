@@ -37,3 +37,12 @@ def test_every_problem_runs_from_the_cli(capsys, argv, key):
 def test_unknown_problem_is_an_error(capsys):
     with pytest.raises(SystemExit):
         main(["continuum", "nosuch"])
+
+
+def test_bad_continuum_input_is_a_user_error(capsys):
+    """A bad argument ends with one line on stderr and exit status 2, not a traceback."""
+    from dnabraid.cli import main
+
+    assert main(["continuum", "closed", "--n", "4", "--topology", "knot"]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("dnabraid: error:") and "odd" in err

@@ -18,6 +18,11 @@ import numpy as np
 __all__ = ["check_finite", "check_n", "check_nonnegative", "check_positive"]
 
 
+
+class InputError(ValueError):
+    """A bad argument of a continuum problem (the CLI reports it as a user error)."""
+
+
 def _is_bool(value) -> bool:
     return isinstance(value, (bool, np.bool_))
 
@@ -27,7 +32,7 @@ def _real(name: str, value, expected: str) -> float:
     if isinstance(value, np.ndarray) and value.ndim == 0 and value.dtype.kind in "iuf":
         value = value[()]
     if _is_bool(value) or not isinstance(value, numbers.Real):
-        raise ValueError(f"{name} must be {expected}, got {value!r}")
+        raise InputError(f"{name} must be {expected}, got {value!r}")
     return float(value)
 
 
@@ -36,7 +41,7 @@ def check_finite(name: str, value) -> float:
     expected = "a finite number"
     v = _real(name, value, expected)
     if not math.isfinite(v):
-        raise ValueError(f"{name} must be {expected}, got {value!r}")
+        raise InputError(f"{name} must be {expected}, got {value!r}")
     return v
 
 
@@ -45,7 +50,7 @@ def check_positive(name: str, value) -> float:
     expected = "a positive finite number"
     v = _real(name, value, expected)
     if not (math.isfinite(v) and v > 0.0):
-        raise ValueError(f"{name} must be {expected}, got {value!r}")
+        raise InputError(f"{name} must be {expected}, got {value!r}")
     return v
 
 
@@ -54,7 +59,7 @@ def check_nonnegative(name: str, value) -> float:
     expected = "a finite number >= 0"
     v = _real(name, value, expected)
     if not (math.isfinite(v) and v >= 0.0):
-        raise ValueError(f"{name} must be {expected}, got {value!r}")
+        raise InputError(f"{name} must be {expected}, got {value!r}")
     return v
 
 
@@ -69,14 +74,14 @@ def check_n(n, *, minimum: int = 1, name: str = "n", what: str = "") -> int:
     if isinstance(n, np.ndarray) and n.ndim == 0 and n.dtype.kind in "iuf":
         n = n[()]
     if _is_bool(n) or not isinstance(n, numbers.Real):
-        raise ValueError(f"{name} must be {expected}, got {n!r}")
+        raise InputError(f"{name} must be {expected}, got {n!r}")
     if isinstance(n, numbers.Integral):
         k = int(n)
     else:
         f = float(n)
         if not (math.isfinite(f) and f == math.floor(f)):
-            raise ValueError(f"{name} must be {expected}, got {n!r}")
+            raise InputError(f"{name} must be {expected}, got {n!r}")
         k = int(f)
     if k < minimum:
-        raise ValueError(f"{name} must be {expected}, got {n!r}")
+        raise InputError(f"{name} must be {expected}, got {n!r}")
     return k

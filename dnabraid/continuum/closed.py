@@ -169,7 +169,7 @@ from scipy.optimize import brentq
 
 from dnabraid.continuum import ply as _ply
 from dnabraid.continuum._result import ContinuumResult
-from dnabraid.continuum._validate import check_n, check_positive
+from dnabraid.continuum._validate import InputError, check_n, check_positive
 
 __all__ = [
     "SEED",
@@ -215,28 +215,28 @@ _N_PHI = 256
 def _check(n, diameter_over_length, topology) -> tuple[int, float, str, float]:
     """Validate ``(n, Delta/L, topology)``; return them with ``m`` (chord turns per circuit)."""
     if topology not in TOPOLOGIES:
-        raise ValueError(f"topology must be one of {TOPOLOGIES}, got {topology!r}")
+        raise InputError(f"topology must be one of {TOPOLOGIES}, got {topology!r}")
     n = check_n(n, minimum=1, name="n",
                 what="the link's |Lk|" if topology == "link" else "the knot's odd n")
     d = check_positive("diameter_over_length", diameter_over_length)
     if topology == "knot" and n % 2 == 0:
-        raise ValueError(f"n must be odd for the (n, 2) torus knot, got n={n}: an even n "
+        raise InputError(f"n must be odd for the (n, 2) torus knot, got n={n}: an even n "
                          f"closes the two strands into two rings, the (2, {n}) torus link "
                          f"(use topology='link' with n={n // 2})")
     m = float(n) if topology == "link" else 0.5 * n
     s = math.pi * m * d
     if s >= 1.0:
-        raise ValueError(f"n={n} does not fit: sin(theta) = pi m Delta/L = pi*{m:g}*{d:g} = "
+        raise InputError(f"n={n} does not fit: sin(theta) = pi m Delta/L = pi*{m:g}*{d:g} = "
                          f"{s:.4g} >= 1 (m = {m:g} chord turns per circuit of the axis); the "
                          f"strands are too short for {m:g} turns at this diameter")
     theta = math.asin(s)
     if theta >= _ply.LOCKUP_ANGLE_RAD:
-        raise ValueError(f"n={n} does not fit: helix angle theta = {math.degrees(theta):.2f} "
+        raise InputError(f"n={n} does not fit: helix angle theta = {math.degrees(theta):.2f} "
                          f"deg >= 45 deg, the two-ply lock-up (slides 17-18; sin(theta) = "
                          f"pi m Delta/L = {s:.4g} >= 1/sqrt(2)): the strands would interpenetrate")
     radius = math.cos(theta) / (2.0 * math.pi)
     if radius < d:
-        raise ValueError(f"n={n} does not fit: the ply axis ring R = L cos(theta)/(2 pi) = "
+        raise InputError(f"n={n} does not fit: the ply axis ring R = L cos(theta)/(2 pi) = "
                          f"{radius:.4g} L is smaller than Delta = {d:g} L, so the strands on "
                          f"opposite sides of the ring's hole would overlap (R >= Delta needed)")
     return n, d, topology, m
@@ -245,10 +245,10 @@ def _check(n, diameter_over_length, topology) -> tuple[int, float, str, float]:
 def ply_turns(n, topology: str = "link") -> float:
     """Chord turns per circuit of the axis, ``m``: ``n`` for a link, ``n/2`` for a knot."""
     if topology not in TOPOLOGIES:
-        raise ValueError(f"topology must be one of {TOPOLOGIES}, got {topology!r}")
+        raise InputError(f"topology must be one of {TOPOLOGIES}, got {topology!r}")
     n = check_n(n, minimum=1, name="n")
     if topology == "knot" and n % 2 == 0:
-        raise ValueError(f"n must be odd for the (n, 2) torus knot, got n={n}")
+        raise InputError(f"n must be odd for the (n, 2) torus knot, got n={n}")
     return float(n) if topology == "link" else 0.5 * n
 
 
@@ -1037,7 +1037,7 @@ def cli_run(args) -> dict:
     """Solve the closed ply chosen by ``args``; JSON-serialisable summary."""
     harmonics = int(getattr(args, "harmonics", 2))
     if harmonics < 0:
-        raise ValueError(f"--harmonics must be >= 0 (0: no relaxation), got {harmonics}")
+        raise InputError(f"--harmonics must be >= 0 (0: no relaxation), got {harmonics}")
     res = closed_ply(args.n, args.diameter_over_length, args.topology, relax=harmonics > 0,
                      harmonics=max(harmonics, 1))
     out = {"problem": "closed_ply", **res.to_dict()}
