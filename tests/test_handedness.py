@@ -9,7 +9,8 @@ distance (5.48 nm, measured at alpha = 0) as Delta.
 
 Measured (2026-11-22): alpha = 0: bead torque 5.02 pN nm, continuum 4.82 (4 %); extension
 187.69 vs 186.90 nm (0.4 %). Torque sum Gamma(+2) + Gamma(-2): alpha = 0.5 pN: bead -3.06,
-continuum -2.89 pN nm (6 %); alpha = 1 pN: -5.64 vs -5.32 (6 %); alpha = 2: -9.0 vs -10.4;
+continuum -2.89 pN nm (6 %); alpha = 1 pN: -5.64 vs -5.32 (6 %) (-4.93 since the chiral range
+became that of the first helical harmonic, 2026-11-30: docs/chiral_range.md); alpha = 2: -9.0 vs -10.4;
 alpha = 4: -14.7 vs -22.0 (the disfavoured left-handed braid opens up: see
 test_disfavoured_hand_opens). The bead torques move by ~3 % with the minimiser's path and
 tolerance (alpha = 0.5: -3.06 to -3.18 over runs). Tolerances below: 15 % on the torques at
