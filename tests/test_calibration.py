@@ -30,10 +30,12 @@ def test_tether_error_bars_cover_the_exact_extension(tmp_path):
     d = s0.dna()
     exact = discrete_wlc_exact(s0.force_pN, s0.n_beads - 1, s0.bead_spacing_nm, d.kappa_kT,
                                d.kT, stretch_k_pN_per_nm=d.k_bond)["extension_nm"]
-    covered, t = 0, []
+    covered, t, verdicts = 0, [], []
     for k in range(STUDIES):
         s = make_scene("tether", dict(base, seed=100 + k))
-        ext = s.run(str(tmp_path / f"s{k}"))["points"][0]["extension_nm"]
+        pt = s.run(str(tmp_path / f"s{k}"))["points"][0]
+        ext = pt["extension_nm"]
+        verdicts.append(pt["converged"])
         covered += abs(ext["mean"] - exact) <= ext["ci_halfwidth"]
         t.append((ext["mean"] - exact) / ext["sem"])
     # binomial(12, 0.95): P(covered <= 8) = 0.2 %; the check fails for badly wrong errors
@@ -43,6 +45,8 @@ def test_tether_error_bars_cover_the_exact_extension(tmp_path):
     assert p > 0.01, (p, t)
     assert math.isfinite(exact) and exact == pytest.approx(22.6, abs=0.5)
     assert np.all(np.isfinite(t))
+    # exact starts: the verdict needs no R-hat/ESS, and these calibrated points pass it
+    assert all(verdicts), verdicts
 
 
 @pytest.mark.parametrize("target, max_replicas, stopped_by", [(0.6, 16, "target"),

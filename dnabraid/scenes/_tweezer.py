@@ -303,9 +303,9 @@ class TweezerScene(Scene):
             d.update(converged=False, reason="one replica: no between-replica check",
                      n_replicas=1)
             return d
-        from ..analysis.convergence import MIN_ESS_RELAXED, RHAT_MAX_RELAXED, replica_summary
+        from ..analysis.convergence import replica_summary
 
-        r = replica_summary(series, rhat_max=RHAT_MAX_RELAXED, min_ess=MIN_ESS_RELAXED)
+        r = replica_summary(series, **self.verdict_rule())
         return {"mean": float(r["mean"]), "sem": float(r["sem"]),
                 "ci_halfwidth": float(r["ci_halfwidth"]), "confidence": r["confidence"],
                 "n_replicas": int(r["n_replicas"]), "sem_within": float(r["sem_within"]),
@@ -313,6 +313,13 @@ class TweezerScene(Scene):
                 "equilibration_samples": [int(x) for x in r["equilibration_samples"]],
                 "replica_means": [float(x) for x in r["replica_means"]],
                 "converged": bool(r["converged"]), "reason": r["reason"]}
+
+    def verdict_rule(self) -> dict:
+        """Keyword arguments of :func:`~dnabraid.analysis.convergence.replica_summary`:
+        the relaxed R-hat <= 1.05 and ESS >= 100 with a data-driven equilibration."""
+        from ..analysis.convergence import MIN_ESS_RELAXED, RHAT_MAX_RELAXED
+
+        return {"rhat_max": RHAT_MAX_RELAXED, "min_ess": MIN_ESS_RELAXED}
 
     def point_summary(self, reps: list) -> dict:
         """Per turn value, from the replicas' (samples, frames) of that point."""

@@ -95,6 +95,22 @@ class Tether(TweezerScene):
                 return x
         return None
 
+    @property
+    def start_is_exact(self) -> bool:
+        """True when every replica starts from an exact draw of the simulated model's own
+        equilibrium (no wall, no excluded volume: the discrete WLC under force)."""
+        return not self.surface and not self.self_avoidance
+
+    def verdict_rule(self) -> dict:
+        """With exact starts each replica mean is an unbiased estimate and the replicas are
+        independent, so the across-replica error is honest however short the replicas are
+        (tests/test_calibration.py measures its coverage); R-hat and ESS, which ask whether
+        each replica forgot its start, are not needed and nothing is discarded. Otherwise the
+        relaxed R-hat/ESS rule of the tweezer scenes."""
+        if self.start_is_exact:
+            return {"equilibration": None, "rhat_max": float("inf"), "min_ess": 0.0}
+        return super().verdict_rule()
+
     def observables(self, model) -> list:
         return [ob.Extension(model.attachments)]
 
