@@ -34,6 +34,11 @@ __all__ = ["DNAParameters", "ChainKit", "Model", "TimeStep", "GROUPS", "passage_
 GROUPS = {"stretch": 0, "bend": 1, "wca": 2, "wall": 3, "pull": 4, "trap": 5, "link": 6,
           "beadwall": 7, "chiral": 8, "twist": 9, "frame": 10}
 
+#: Ring frames (:meth:`ChainKit.add_ring_twist`): spring constant / bond spring constant and
+#: side-particle friction / bead friction.
+RING_FRAME_K_FRACTION = 0.2
+RING_FRAME_FRICTION_FRACTION = 0.2
+
 #: WCA curvature at contact, U''(sigma) = 456 eps / sigma^2 (4 eps [156 - 42] / sigma^2 ... at
 #: r = sigma: 4 eps (12*13 - 6*7) / sigma^2 = 456 eps / sigma^2).
 WCA_CONTACT_CURVATURE = 456.0
@@ -165,6 +170,7 @@ class ChainKit:
         self.sides = None
         self.bead_orientation = None
         self.extra: dict = {}
+        self._ring_forces = None
 
     # -- particles ---------------------------------------------------------------------
     @property
@@ -322,6 +328,62 @@ class ChainKit:
                                  exclusions=excl, name="wca"), "wca",
                        rate=2.0 * WCA_CONTACT_CURVATURE * d.kT / d.diameter_nm**2 / d.zeta_bead)
         return len(excl)
+
+    def add_ring_twist(self, ring, twist_persistence_nm: float, *, delta_lk: int = 0,
+                       chain_id: str = "F", arm_fraction: float = 1.0,
+                       friction_fraction: float = RING_FRAME_FRICTION_FRACTION,
+                       k_fraction: float = RING_FRAME_K_FRACTION) -> np.ndarray:
+        """Material frames and twist around a closed chain, closed with Lk = ``delta_lk``.
+
+        One side particle per bond (:mod:`dnabraid.forces.twist`; no excluded volume), at
+        ``arm_fraction`` x b from its bead, friction ``friction_fraction`` x the bead's,
+        held by frame springs of ``k_fraction`` x the bond stiffness. Stiffer springs than
+        the plectoneme scene's (0.05): with those, a side particle of a 144-nm ring at
+        b = 3 nm slid (once in ~1e6 steps) to |u| = 1.2 nm of its bond's axis, where the
+        twist's stiffness g / |u|^2 outgrew the time step and the run blew up; with 0.2 the
+        axial and radial wobble is ~0.3 nm. The heavier side particle keeps the frame rates
+        below the beads' so the time step does not shrink. The frames start parallel-transported around the ring and turned evenly
+        so that the ribbon's linking number Tw + Wr is ``delta_lk``
+        (:func:`~dnabraid.geometry.twist.ring_side_positions`); the n twist joints include
+        the seam, each with g = C kT / b, so that a free stretch of ring has
+        <omega^2> = b / C per joint. Lk is conserved by the dynamics (a ring passing through
+        itself, or a joint angle through pi, would change it: the scenes check it).
+        Returns the side particles.
+        """
+        from .forces.twist import frame_springs, ring_joints, twist_force
+        from .geometry.twist import ring_side_positions
+
+        ring = np.asarray(ring, int)
+        if not any(len(c) == len(ring) and np.array_equal(c, ring) and cl
+                   for c, cl in zip(self.chains, self.closed)):
+            raise ValueError("add_ring_twist: the particles are not a closed chain of this kit "
+                             "(add it with add_chain(..., closed=True) first)")
+        d = self.dna
+        b = d.bead_spacing_nm
+        arm = arm_fraction * b
+        zeta_f = friction_fraction * d.zeta_bead
+        k_f = k_fraction * d.k_bond
+        g = float(twist_persistence_nm) * d.kT / b
+        side_pos = ring_side_positions(self.positions[ring], arm, delta_lk)
+        sides = self.add_particles(chain_id, "FRM", "F", zeta_f, side_pos)
+        springs = frame_springs(np.r_[ring, ring[:1]], sides, arm, b, k_f, name="frame")
+        joints = twist_force(ring_joints(ring, sides), g, name="twist")
+        if self._ring_forces is None:
+            # one force per term for all rings (a Context compiles each custom force once)
+            self._ring_forces = (self.add_force(springs, "frame"),
+                                 self.add_force(joints, "twist"))
+        else:
+            f_springs, f_twist = self._ring_forces
+            for k in range(springs.getNumBonds()):
+                f_springs.addBond(*springs.getBondParameters(k))
+            for k in range(joints.getNumBonds()):
+                f_twist.addBond(*joints.getBondParameters(k))
+        self.rates["frame"] = 4.0 * k_f / zeta_f
+        self.rates["twist"] = 6.0 * g / (arm * arm * zeta_f)
+        # on the DNA beads: the frame springs' reaction 4 k_f and the twist through the
+        # tangents, bounded by 12 g / b^2 (three joints touch a bead)
+        self.rates["twist_on_dna"] = (4.0 * k_f + 12.0 * g / b**2) / d.zeta_bead
+        return sides
 
     def add_wall(self) -> None:
         """A wall at z = d/2 keeps mobile DNA above the surface."""

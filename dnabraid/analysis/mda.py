@@ -34,7 +34,10 @@ __all__ = [
     "CrossingAngles",
     "Extension",
     "Plectonemes",
+    "RingLinking",
+    "RingWrithe",
     "TwistWrithe",
+    "select_rings",
     "select_strands",
     "select_twisted_tether",
 ]
@@ -383,3 +386,125 @@ class Plectonemes(AnalysisBase):
 
     def _conclude(self):
         self.results.fraction = float(np.mean(self.results.count > 0)) if self.n_frames else 0.0
+
+
+# ----------------------------------------------------------------------------- closed rings
+def select_rings(universe):
+    """Beads and side particles of each ring of a catenane trajectory.
+
+    The catenane scene adds ring 1, ring 2 (residues ``DNA``) and then the side particles of
+    ring 1, ring 2 (residues ``FRM``), each as its own chain; OpenMM's PDB writer renames
+    the chains A, B, C, D in that order. Returns ``(rings, sides)``: two lists of AtomGroups
+    (one per ring; ``sides`` empty when the trajectory has no frames).
+    """
+    rings, sides = [], []
+    ids: list = []
+    for c in universe.atoms.chainIDs:
+        if c not in ids:
+            ids.append(c)
+    for c in ids:
+        ag = universe.select_atoms(f"chainID {c}")
+        names = set(ag.resnames)
+        if names == {"DNA"}:
+            rings.append(ag)
+        elif names == {"FRM"}:
+            sides.append(ag)
+    if not rings:
+        raise ValueError("no chains of resname 'DNA' in this universe: not a ring trajectory")
+    if sides and len(sides) != len(rings):
+        raise ValueError(f"{len(rings)} rings but {len(sides)} chains of side particles")
+    return rings, sides
+
+
+class RingWrithe(AnalysisBase):
+    """Writhe (and, with side particles, twist) of a closed ring per frame.
+
+    Wr is the exact Gauss self-integral of the closed polygon
+    (:func:`dnabraid.geometry.curves.writhe`); Tw sums the joint angles of the ring's bond
+    frames, seam included (:func:`dnabraid.geometry.twist.ring_twist`), so that
+    Tw + Wr = Lk, an integer (White 1969).
+
+    Parameters
+    ----------
+    ring_atoms : AtomGroup
+        The ring's beads in order (the last joins the first), at least 4.
+    side_atoms : AtomGroup, optional
+        One side particle per bond (as many as beads).
+
+    Attributes
+    ----------
+    results.writhe : ndarray, shape (n_frames,)
+        Turns.
+    results.twist, results.linking : ndarray, shape (n_frames,), only with ``side_atoms``
+        Turns; ``linking`` = twist + writhe.
+    results.mean, results.sem : float
+        Mean writhe and its autocorrelation-corrected SEM (turns).
+    """
+
+    def __init__(self, ring_atoms, side_atoms=None, **kwargs):
+        _check_group(ring_atoms, "ring_atoms", min_atoms=4)
+        if side_atoms is not None:
+            _check_group(side_atoms, "side_atoms", min_atoms=4)
+            _check_same_universe(ring_atoms, side_atoms)
+            if len(side_atoms) != len(ring_atoms):
+                raise ValueError(f"a ring of {len(ring_atoms)} beads has {len(ring_atoms)} "
+                                 f"bonds: need as many side particles; got {len(side_atoms)}")
+        super().__init__(ring_atoms.universe.trajectory, **kwargs)
+        self._ring, self._sides = ring_atoms, side_atoms
+
+    def _prepare(self):
+        self.results.writhe = np.full(self.n_frames, np.nan)
+        if self._sides is not None:
+            self.results.twist = np.full(self.n_frames, np.nan)
+
+    def _single_frame(self):
+        x = _nm(self._ring)
+        i = self._frame_index
+        self.results.writhe[i] = geometry.writhe(x)
+        if self._sides is not None:
+            self.results.twist[i] = _twist.ring_twist(x, _nm(self._sides))
+
+    def _conclude(self):
+        if self._sides is not None:
+            self.results.linking = self.results.twist + self.results.writhe
+        s = stats.mean_sem(self.results.writhe)
+        self.results.stats = s
+        self.results.mean = s["mean"]
+        self.results.sem = s["sem"]
+
+
+class RingLinking(AnalysisBase):
+    """Gauss linking number of two closed rings per frame
+    (:func:`dnabraid.geometry.curves.gauss_linking_number`): an integer while the rings do
+    not pass through each other.
+
+    Parameters
+    ----------
+    ring1_atoms, ring2_atoms : AtomGroup
+        Each ring's beads in order, at least 3 each, from one Universe.
+
+    Attributes
+    ----------
+    results.linking : ndarray, shape (n_frames,)
+    results.conserved : bool
+        Every frame within 1e-3 of the first frame's integer.
+    """
+
+    def __init__(self, ring1_atoms, ring2_atoms, **kwargs):
+        _check_group(ring1_atoms, "ring1_atoms", min_atoms=3)
+        _check_group(ring2_atoms, "ring2_atoms", min_atoms=3)
+        _check_same_universe(ring1_atoms, ring2_atoms)
+        super().__init__(ring1_atoms.universe.trajectory, **kwargs)
+        self._r1, self._r2 = ring1_atoms, ring2_atoms
+
+    def _prepare(self):
+        self.results.linking = np.full(self.n_frames, np.nan)
+
+    def _single_frame(self):
+        self.results.linking[self._frame_index] = geometry.gauss_linking_number(
+            _nm(self._r1), _nm(self._r2))
+
+    def _conclude(self):
+        lk = self.results.linking
+        self.results.conserved = bool(lk.size == 0 or np.all(np.abs(lk - np.round(lk[0]))
+                                                             < 1e-3))

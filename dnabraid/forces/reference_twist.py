@@ -85,6 +85,19 @@ def twist(pos, joints, g):
     return _energy_forces(pos, om, grads, [(r1, r0), (s1, r0), (r2, r1), (s2, r1)], g)
 
 
+def twist_ring(pos, ring, sides, g):
+    """A closed ring: U = sum over its n joints (seam included) of g/2 omega^2.
+
+    Bond i joins ``ring[i] -> ring[(i+1) % n]`` with side particle ``sides[i]``; joint i
+    takes bond i to bond i + 1 (mod n). Built here from the ring directly (not from
+    :func:`dnabraid.forces.twist.ring_joints`), so the seam is checked independently.
+    """
+    r = np.asarray(ring, int).ravel()
+    s = np.asarray(sides, int).ravel()
+    joints = np.stack([r, np.roll(r, -1), np.roll(r, -2), s, np.roll(s, -1)], axis=1)
+    return twist(pos, joints, g)
+
+
 def twist_anchor(pos, bonds, tangent, material, g):
     """Fixed frame (tangent, material) against bonds ``(r_0, r_1, s_0)``."""
     pos = np.asarray(pos, float)

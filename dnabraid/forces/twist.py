@@ -51,6 +51,15 @@ frame, whose tangent is a fixed direction (the bead's axis, +z, kept by the magn
 field) and whose material vector is the horizontal part of ``m - r_att`` for the bead's
 orientation particle m (held by the rotational trap, :func:`~dnabraid.forces.trap_force`).
 Turning the bead thus changes the linking number.
+
+Rings (closed chains). A ring of n beads has n bonds, n side particles and n joints; the
+seam joint ``(r_{n-1}, r_0, r_1, s_{n-1}, s_0)`` is an ordinary joint
+(:func:`ring_joints`), every joint stands for a bond length b, and there are no clamps. The
+ribbon's linking number Lk = Tw + Wr is then fixed by the frames the ring starts with
+(:func:`dnabraid.geometry.twist.ring_side_positions`) and changes only if the ring passes
+through itself or a joint angle passes through pi (the atan2 branch cut, at g pi^2 / 2 =
+C pi^2 / (2 b) kT: ~99 kT for C = 100 nm, b = 5 nm). The twist of a ring relaxes as a whole
+only through writhe: Tw + Wr = Lk (White 1969).
 """
 
 from __future__ import annotations
@@ -187,6 +196,31 @@ def twist_bead_force(bonds, g_pN_nm, axis=(0.0, 0.0, 1.0), *,
     return f
 
 
+def ring_joints(ring, sides) -> np.ndarray:
+    """Joints of a closed ring, seam included: ``(r_i, r_{i+1}, r_{i+2}, s_i, s_{i+1})`` mod n.
+
+    Parameters
+    ----------
+    ring : array_like of int, shape (n,)
+        Beads of the ring (bond i joins ring[i] -> ring[(i + 1) % n]).
+    sides : array_like of int, shape (n,)
+        Side particle of each bond.
+
+    Returns
+    -------
+    ndarray of int, shape (n, 5)
+        Joint i takes bond i to bond i + 1 (mod n); the last one is the seam's.
+    """
+    r = np.asarray(ring, int).ravel()
+    s = np.asarray(sides, int).ravel()
+    n = r.size
+    if n < 3 or s.size != n:
+        raise ValueError(f"a ring needs >= 3 beads and one side particle per bond; got "
+                         f"{n} beads and {s.size} side particles")
+    i = np.arange(n)
+    return np.stack([r[i], r[(i + 1) % n], r[(i + 2) % n], s[i], s[(i + 1) % n]], axis=1)
+
+
 def frame_springs(chain, sides, arm_nm: float, bond_nm: float, k_pN_per_nm: float, *,
                   name: str = "frame") -> openmm.HarmonicBondForce:
     """Springs holding side particle s_i at r_i + a (perpendicular to bond i).
@@ -197,7 +231,8 @@ def frame_springs(chain, sides, arm_nm: float, bond_nm: float, k_pN_per_nm: floa
     Parameters
     ----------
     chain : array_like of int, shape (n,)
-        Beads of the strand.
+        Beads of the strand (for a ring of m beads pass the m beads and the first again,
+        n = m + 1, so that bond m - 1 closes the ring).
     sides : array_like of int, shape (n - 1,)
         Side particle of each bond.
     arm_nm, bond_nm : float

@@ -18,6 +18,14 @@ of the extended polygon (segment-pair solid angles, :func:`geometry.writhe` with
 closing segment). With this closure and frames parallel-transported along the rays,
 Lk = Tw + Wr equals the bead's angle / 2 pi (unwrapped) as long as the chain does not
 pass through itself or through a ray (the surface and the bead keep it from the rays).
+
+Rings. A closed chain of n beads has n bonds (bond n-1 joins r_{n-1} -> r_0) and n joints
+(the seam joint takes bond n-1 to bond 0); :func:`ring_twist` sums all n joint angles and
+:func:`~dnabraid.geometry.curves.writhe` is the exact Gauss self-integral of the closed
+polygon, so Tw + Wr is the ribbon's integer linking number (White 1969; Fuller 1978;
+the discrete form: the holonomy of discrete parallel transport around a closed polygon is
+2 pi Wr mod 2 pi). :func:`ring_side_positions` builds frames that close with a chosen
+linking number.
 """
 
 from __future__ import annotations
@@ -27,7 +35,7 @@ import math
 
 import numpy as np
 
-from .curves import _as_points, _gauss_sum
+from .curves import _as_points, _gauss_sum, writhe
 
 __all__ = [
     "Plectoneme",
@@ -36,6 +44,9 @@ __all__ = [
     "linking_number",
     "parallel_transport",
     "plectoneme_summary",
+    "ring_bond_frames",
+    "ring_side_positions",
+    "ring_twist",
     "tether_twist",
     "twist_angles",
     "writhe_open",
@@ -158,6 +169,99 @@ def writhe_open(chain, ray_length: float | None = None) -> float:
 def linking_number(chain, sides, bead_vector, **kw) -> float:
     """Lk = Tw + Wr of a framed tether (turns): equals the bead's turns (unwrapped)."""
     return tether_twist(chain, sides, bead_vector, **kw) + writhe_open(chain)
+
+
+# ----------------------------------------------------------------------------- rings
+def ring_bond_frames(ring, sides):
+    """Unit tangents and unit material vectors of the n bonds of a framed ring.
+
+    Parameters
+    ----------
+    ring : array_like, shape (n, 3)
+        Bead positions (nm); bond i joins bead i -> bead (i + 1) mod n.
+    sides : array_like, shape (n, 3)
+        Side particle of each bond (attached at the bond's first bead).
+
+    Returns
+    -------
+    t, u : ndarray, shape (n, 3)
+    """
+    p = _as_points(ring, "ring", min_points=3)
+    s = np.asarray(sides, float)
+    if s.shape != p.shape:
+        raise ValueError(f"a ring of {p.shape[0]} beads has {p.shape[0]} bonds: sides must "
+                         f"have shape {p.shape}; got {s.shape}")
+    return bond_frames(np.vstack([p, p[:1]]), s)
+
+
+def ring_twist(ring, sides, *, per_joint=False):
+    """Twist Tw (turns) of a framed ring: the n joint angles, seam included, / 2 pi.
+
+    Parameters
+    ----------
+    ring : array_like, shape (n, 3)
+    sides : array_like, shape (n, 3)
+    per_joint : bool
+        Return the n joint angles (rad; joint i takes bond i to bond i + 1 mod n).
+    """
+    t, u = ring_bond_frames(ring, sides)
+    om = twist_angles(t, u, np.roll(t, -1, axis=0), np.roll(u, -1, axis=0))
+    return om if per_joint else float(np.sum(om) / TWO_PI)
+
+
+def ring_side_positions(ring_pos, arm_nm: float, delta_lk: int = 0, first=None) -> np.ndarray:
+    """Side-particle positions of a ring's frames closed with linking number ``delta_lk``.
+
+    The material vector of bond 0 is ``first`` (projected on its normal plane; default the
+    normal of the bond closest to the ring's mean plane); each next one is the parallel
+    transport of the previous, turned about its tangent by the same angle
+    ``2 pi (delta_lk - Wr) / n``, so the twist is spread evenly, Tw = delta_lk - Wr and
+    Lk = Tw + Wr = delta_lk exactly (the seam joint closes with the same angle because a
+    ribbon's Lk is an integer).
+
+    Parameters
+    ----------
+    ring_pos : array_like, shape (n, 3)
+        Bead positions (nm) of the closed ring.
+    arm_nm : float
+        Distance of a side particle from its bead.
+    delta_lk : int
+        Linking number of the closed ribbon (turns); a ribbon's Lk is an integer.
+    first : array_like, shape (3,), optional
+
+    Returns
+    -------
+    ndarray, shape (n, 3)
+    """
+    if int(delta_lk) != delta_lk:
+        raise ValueError(f"delta_lk must be an integer (a closed ribbon's linking number); "
+                         f"got {delta_lk!r}")
+    p = _as_points(ring_pos, "ring_pos", min_points=4)
+    n = p.shape[0]
+    t = np.roll(p, -1, axis=0) - p
+    t /= np.linalg.norm(t, axis=1, keepdims=True)
+    wr = writhe(p)
+    step = TWO_PI * (float(delta_lk) - wr) / n
+    if abs(step) >= math.pi / 2:
+        raise ValueError(f"delta_lk={delta_lk} over {n} bonds turns each joint by "
+                         f"{math.degrees(step):.0f} deg (>= 90 deg): use more beads")
+    if first is None:
+        c = p - p.mean(axis=0)
+        normal = np.linalg.svd(c)[2][-1]  # normal of the best-fit plane
+        first = np.cross(t[0], normal)
+        if np.linalg.norm(first) < 1e-8:
+            first = np.cross(t[0], [1.0, 0.0, 0.0] if abs(t[0, 0]) < 0.9 else [0.0, 1.0, 0.0])
+    cur = np.asarray(first, float) - np.dot(first, t[0]) * t[0]
+    cur /= np.linalg.norm(cur)
+    u = np.empty_like(t)
+    u[0] = cur
+    for i in range(1, n):
+        v = parallel_transport(u[i - 1], t[i - 1], t[i])
+        v = v - np.dot(v, t[i]) * t[i]
+        v /= np.linalg.norm(v)
+        # turn by `step` about t_i (right-handed)
+        u[i] = math.cos(step) * v + math.sin(step) * np.cross(t[i], v)
+    return p + float(arm_nm) * u
 
 
 # ----------------------------------------------------------------------------- plectonemes

@@ -1,0 +1,638 @@
+"""Scene ``catenane``: two linked DNA minicircles (or one ring) at room temperature.
+
+Two closed, torsionally constrained DNA rings (no nick) linked once (the Hopf link, Gauss
+Lk_12 = +-1), with bending, twist (one side particle per bond, closed material frames,
+:meth:`dnabraid.chains.ChainKit.add_ring_twist`), excluded volume and the chiral
+interaction alpha tan(eta/2) per unit contact length (seed: van der Heijden, *Equilibrium
+theory of elastic braids*, slides 31-32, the buckling of two linked rings driven by the
+chiral term; the term is left out at alpha = 0). Each ring's own linking number is set by
+``delta_lk`` (the frames close with that many extra turns): Lk_i = Tw_i + Wr_i = delta_lk
+(White 1969) for all time, as is Lk_12, unless DNA passes through DNA; both are checked at
+every sample and a change stops the run with a clear error. No tweezer bead, no wall.
+
+Sizes. The seed's linked rings have Delta/L = 0.02 (Delta the diameter, L each ring's
+length): at 1 M NaCl (Delta = 2.9 nm, Stigter) that is L = 144 nm = 424 bp, the default;
+the bead spacing 3 nm is the coarsest whose strand-passage barrier stays >= 20 kT at that
+diameter (2.9 nm; :func:`dnabraid.chains.max_bead_spacing_nm` = 3.5 nm). 720 bp at 150 mM
+(L = 245 nm, Delta = 4.9 nm, Delta/L = 0.02 too) is a run with ``length_nm = 245``,
+``salt_mM = 150``, ``bead_spacing_nm = 5``.
+
+Observables (every sample unless said): ``lk12`` (Gauss linking number of the rings),
+``twist_i``, ``writhe_i`` (turns; Tw from the joint angles, seam included; Wr the exact
+Gauss self-integral), ``lk_error`` (max_i |Tw_i + Wr_i - delta_lk|: the discrete White
+theorem holds to round-off, so this is ~1e-12 unless the topology changed), ``dtw_half_i``
+(twist of the first half of ring i minus that of the second half, turns, see below),
+``contact_length_nm`` (ring-1 segments whose closest ring-2 segment is nearer than the
+contact distance, times b), ``braid_angle_rad`` (their mean folded braid angle eta,
+:func:`dnabraid.geometry.curves.crossing_angles`: eta < 0 right-handed, > 0 left-handed;
+NaN without contact) and, every frame, ``chiral_energy_pN_nm`` (the term's numpy twin).
+
+Twist fluctuations of a closed ring. With Lk fixed, Tw = Lk - Wr: the ring's total twist
+fluctuates only with its writhe, <dTw^2> = <dWr^2>, not L/(4 pi^2 C). What is exact for the
+model whatever the writhe: given the shape, the n joint angles are Gaussian (stiffness
+g = C kT / b each, flat frame measure) on the plane sum(omega) = 2 pi (Lk - Wr), so their
+deviations from the mean do not depend on the shape, and the difference of the two halves'
+twists, dTw_half = (sum_{j < n/2} omega_j - sum_{j >= n/2} omega_j) / 2 pi, has
+<dTw_half^2> = n b / (4 pi^2 C) = L / (4 pi^2 C) exactly (n even). That is the ring's
+twist-persistence check (``twist_half_variance`` in the summary, with its theory value).
+
+Run length and time scales (measured, 144-nm rings, b = 3 nm, dt = 6 ps). The ring's
+writhe (tied to its total twist) decorrelates in ~5000 steps (the frames must turn as a
+whole; twist diffuses along the ring); the rings slide through each other only by rigid
+rotation (~40 ns, ~7000 steps); contacts between the rings are rare without buckling (none
+in 8 x 48000 steps of 144-nm rings at Delta Lk = +-1). The default run, 2 replicas x
+(20000 + 100000) steps, takes a few minutes on 2 cores (~700 steps/s per replica) and
+yields ~20 independent writhe samples per replica: enough for the topology checks and
+twist fluctuations, flagged NOT CONVERGED for <Wr>; workflows/catenane.py runs longer.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import os
+import time
+from typing import ClassVar
+
+import numpy as np
+
+from .. import forcefield, reporters, rundir
+from ..chains import (
+    MIN_PASSAGE_BARRIER_KT,
+    ChainKit,
+    DNAParameters,
+    Model,
+    max_bead_spacing_nm,
+    passage_barrier_kT,
+)
+from ..engine import INTEGRATORS, MAX_SEED, check_platform
+from ..forces.chiral import chiral_force, default_exclusion
+from ..forces.reference_chiral import chiral_energy_forces, default_subdivisions
+from ..geometry.curves import crossing_angles, gauss_linking_number, writhe
+from ..geometry.twist import ring_twist
+from ..observables import Observable
+from ..protocols import TurnSchedule
+from ._tweezer import MAX_REPLICAS, _run_jobs, _usable_cores
+from .base import Scene, SceneError, key
+
+__all__ = ["Catenane", "RingObservables", "ChiralEnergy", "hopf_start"]
+
+TWO_PI = 2.0 * math.pi
+_MECH = forcefield.mechanics()
+#: Smallest number of beads per ring.
+MIN_RING_BEADS = 12
+#: Most beads per ring (time stays sane).
+MAX_RING_BEADS = 2000
+
+
+def hopf_start(n: int, bead_spacing_nm: float, rings: int = 2, link: int = 1,
+               gap_nm: float | None = None) -> list:
+    """Regular n-gons of side b: one in the xy plane about the origin; with ``rings = 2`` a
+    second one in the xz plane, oriented so that the Gauss linking number is ``link``
+    (+1 or -1). ``gap_nm`` None: ring 2 centred at (R, 0, 0), each ring through the other's
+    centre (their closest points R apart, out of contact); else centred at
+    (2 R - gap, 0, 0), so that ring 2 passes ``gap_nm`` inside ring 1's strand at (R, 0, 0),
+    crossing it at right angles (a start in contact). The frames are added by the kit.
+
+    Returns
+    -------
+    list of ndarray, shape (n, 3), nm
+    """
+    R = bead_spacing_nm / (2.0 * math.sin(math.pi / n))
+    s = TWO_PI * np.arange(n) / n
+    r1 = np.c_[R * np.cos(s), R * np.sin(s), np.zeros(n)]
+    if rings == 1:
+        return [r1]
+    c = R if gap_nm is None else 2.0 * R - float(gap_nm)
+    # half a bead step off the axes, so that no bead of one ring sits on the other's plane
+    s2 = s + math.pi + (0.0 if gap_nm is None else math.pi / n)
+    r2 = np.c_[c + R * np.cos(s2), np.zeros(n), R * np.sin(s2)]
+    if round(gauss_linking_number(r1, r2)) != link:
+        r2 = r2[::-1].copy()
+    return [r1, r2]
+
+
+def _closed(p):
+    return np.vstack([p, p[:1]])
+
+
+class RingObservables(Observable):
+    """Tw, Wr, Lk checks of every ring, Lk_12, contact length and braid angle (turns, nm, rad).
+
+    Parameters
+    ----------
+    rings : list of int arrays
+        Beads of each ring.
+    sides : list of int arrays
+        Side particle of each bond of each ring.
+    delta_lk : int
+        Every ring's linking number.
+    link : int or None
+        Gauss Lk_12 of the two rings (None for one ring).
+    contact_nm : float
+        Largest closest distance of two segments in contact.
+    bead_spacing_nm : float
+    """
+
+    def __init__(self, rings, sides, delta_lk, link, contact_nm, bead_spacing_nm):
+        self.rings = [np.asarray(r, int) for r in rings]
+        self.sides = [np.asarray(s, int) for s in sides]
+        self.lk = float(delta_lk)
+        self.link = link
+        self.contact = float(contact_nm)
+        self.b = float(bead_spacing_nm)
+        cols = {}
+        for k in range(1, len(self.rings) + 1):
+            cols[f"twist_{k}"] = ("turns", f"Tw of ring {k} (joint angles / 2 pi, seam included)")
+            cols[f"writhe_{k}"] = ("turns", f"Wr of ring {k} (Gauss self-integral)")
+            cols[f"dtw_half_{k}"] = ("turns", f"Tw of ring {k}'s first half minus its second "
+                                     "half; <dtw_half^2> = L / (4 pi^2 C) exactly")
+        cols["lk_error"] = ("turns", "max over rings of |Tw + Wr - delta_lk| (White's theorem; "
+                            "round-off unless the topology changed)")
+        if len(self.rings) == 2:
+            cols["lk12"] = ("", "Gauss linking number of the two rings")
+            cols["contact_length_nm"] = ("nm", "b x ring-1 segments with a ring-2 segment "
+                                         "closer than the contact distance")
+            cols["braid_angle_rad"] = ("rad", "contact-averaged folded braid angle eta (< 0 "
+                                       "right-handed); NaN without contact")
+        self.columns = cols
+
+    def __call__(self, pos, ctx, values):
+        out = {}
+        err = 0.0
+        for k, (r, s) in enumerate(zip(self.rings, self.sides), 1):
+            om = ring_twist(pos[r], pos[s], per_joint=True)
+            tw = float(np.sum(om)) / TWO_PI
+            wr = writhe(pos[r])
+            h = len(om) // 2
+            out[f"twist_{k}"] = tw
+            out[f"writhe_{k}"] = wr
+            out[f"dtw_half_{k}"] = float(np.sum(om[:h]) - np.sum(om[h:2 * h])) / TWO_PI
+            err = max(err, abs(tw + wr - self.lk))
+        out["lk_error"] = err
+        if len(self.rings) == 2:
+            p1, p2 = pos[self.rings[0]], pos[self.rings[1]]
+            out["lk12"] = gauss_linking_number(p1, p2)
+            eta, _ = crossing_angles(_closed(p1), _closed(p2), self.contact)
+            out["contact_length_nm"] = self.b * len(eta)
+            out["braid_angle_rad"] = float(np.mean(eta)) if len(eta) else math.nan
+        return out
+
+    def check(self, values, ctx):
+        if values["lk_error"] > 0.5:
+            return (f"a ring's linking number changed: max |Tw + Wr - delta_lk| = "
+                    f"{values['lk_error']:.3f} turns (delta_lk = {self.lk:g}): DNA passed "
+                    "through itself or a joint's twist angle passed through pi")
+        if self.link is not None and abs(values["lk12"] - self.link) > 0.5:
+            return (f"the rings' linking number changed from {self.link:+d} to "
+                    f"{values['lk12']:.3f}: one ring passed through the other (strand passage; "
+                    "lower timestep_safety or the bead spacing)")
+        return None
+
+
+class ChiralEnergy(Observable):
+    """The chiral term's energy (pN nm) from its numpy twin, every frame (0 at alpha = 0)."""
+
+    every = "frame"
+
+    def __init__(self, rings, alpha_pN, delta_nm, debye_nm, bead_spacing_nm):
+        self.rings = [np.asarray(r, int) for r in rings]
+        self.alpha = float(alpha_pN)
+        self.kw = dict(delta_nm=delta_nm, debye_nm=debye_nm,
+                       exclude_neighbours=default_exclusion(bead_spacing_nm, delta_nm, debye_nm),
+                       subdivisions=default_subdivisions(bead_spacing_nm, delta_nm, debye_nm),
+                       closed=True)
+        self.columns = {"chiral_energy_pN_nm": ("pN nm", "alpha tan(eta/2) summed over "
+                                                "contacts (numpy twin of the force)")}
+
+    def __call__(self, pos, ctx, values):
+        if self.alpha == 0.0:
+            return {"chiral_energy_pN_nm": 0.0}
+        e, _ = chiral_energy_forces(pos, self.rings, self.alpha, **self.kw)
+        return {"chiral_energy_pN_nm": float(e)}
+
+
+def _summarise(series: list, equilibration="chodera") -> dict:
+    """Mean, error and convergence verdict of one observable from its replica series.
+
+    ``equilibration`` is handed to :func:`~dnabraid.analysis.convergence.replica_summary`:
+    ``"chodera"`` (automatic detection) for ordinary observables, ``None`` for squared
+    fluctuations such as dTw_half^2, whose chi^2-like series start with no transient to
+    remove (the scene's equilibration_steps, >> the twist relaxation time, already did)
+    and whose rare large values the detector would cut as a "transient", biasing the mean
+    low (measured on a 144-nm ring: 0.0258 with detection, 0.0347 without, theory 0.0365).
+    """
+    from ..analysis.convergence import MIN_ESS_RELAXED, RHAT_MAX_RELAXED, replica_summary
+
+    series = [np.asarray(x, float) for x in series]
+    if not series or any(x.size == 0 or not np.all(np.isfinite(x)) for x in series):
+        return {"mean": None, "sem": None}
+    if len(series) == 1:
+        d = reporters.mean_sem_entry(series[0])
+        d.update(converged=False, reason="one replica: no between-replica check", n_replicas=1)
+        return d
+    r = replica_summary(series, rhat_max=RHAT_MAX_RELAXED, min_ess=MIN_ESS_RELAXED,
+                        equilibration=equilibration)
+    return {"mean": float(r["mean"]), "sem": float(r["sem"]),
+            "ci_halfwidth": float(r["ci_halfwidth"]), "n_replicas": int(r["n_replicas"]),
+            "sem_within": float(r["sem_within"]), "rhat": float(r["rhat"]),
+            "ess": float(r["ess"]), "replica_means": [float(x) for x in r["replica_means"]],
+            "converged": bool(r["converged"]), "reason": r["reason"]}
+
+
+def _between(means) -> dict:
+    """Mean and standard error (scatter of replica means / sqrt R) of per-replica values."""
+    m = np.asarray([x for x in means if x is not None and np.isfinite(x)], float)
+    if m.size == 0:
+        return {"mean": None, "sem": None, "n_replicas": 0}
+    sem = float(np.std(m, ddof=1) / math.sqrt(m.size)) if m.size > 1 else None
+    return {"mean": float(m.mean()), "sem": sem, "n_replicas": int(m.size),
+            "replica_means": [float(x) for x in m]}
+
+
+@dataclasses.dataclass(frozen=True)
+class Catenane(Scene):
+    """Two linked DNA minicircles (or one ring) at room temperature; keys in nm, pN, K."""
+
+    name: ClassVar[str] = "catenane"
+    help: ClassVar[str] = ("two linked DNA minicircles (Hopf link) at room temperature: "
+                           "bending, twist with each ring's own linking number, excluded "
+                           "volume and the chiral term; Tw, Wr, Lk_12, contact and braid angle")
+
+    length_nm: float = key(144.0, "nm", "contour length of each ring (144 nm = 424 bp: "
+                           "Delta/L = 0.02 at 1 M, the seed's slides 31-32)")
+    salt_mM: float = key(1000.0, "mM", "monovalent salt; sets the effective DNA diameter "
+                         "(Stigter 1977) and Debye length")
+    bead_spacing_nm: float = key(3.0, "nm", "distance b between beads along a ring")
+    rings: int = key(2, "", "2: two linked rings; 1: a single ring (twist checks)")
+    link: int = key(1, "", "sign of the rings' Gauss linking number Lk_12 (+1 or -1; for "
+                    "apolar DNA both orientations are the same Hopf link)")
+    start: str = key("apart", "", "'apart': each ring through the other's centre (strands R "
+                     "apart); 'contact': ring 2's strand 1.3 diameters from ring 1's (the "
+                     "rings' relative position relaxes slowly: compare both starts)")
+    delta_lk: int = key(0, "turns", "each ring's own linking number Delta Lk_i = Tw_i + Wr_i "
+                        "(an integer: the model has no intrinsic helical twist, so a closed "
+                        "ribbon's Lk is a whole number of turns)")
+    persistence_nm: float = key(float(_MECH["persistence_nm"]), "nm",
+                                "bending persistence length (forcefields/dna.toml)")
+    twist_persistence_nm: float = key(float(_MECH["twist_persistence_nm"]), "nm",
+                                      "twist persistence length C (50-100 nm for DNA)")
+    alpha: float = key(0.0, "pN", "chiral strength alpha of phi = alpha tan(eta/2) (pN = pN "
+                       "nm per nm of contact); 0 = no chiral term; 'salt' = the estimate at "
+                       "salt_mM (forcefields/chiral.toml); > 0 favours right-handed contacts")
+    contact_nm: float = key(0.0, "nm", "largest distance of two segments in contact (contact "
+                            "length, braid angle); 0 = diameter + 2 Debye lengths")
+    temperature_K: float = key(298.15, "K", "temperature")
+    diameter_nm: float = key(0.0, "nm", "effective DNA diameter; 0 = from salt (Stigter 1977)")
+    stretch_modulus_pN: float = key(float(_MECH["stretch_modulus_pN"]), "pN",
+                                    "stretch modulus S (bond stiffness S/b)")
+    stretch: str = key("bonds", "", "'bonds' (harmonic springs) or 'constraints' (rigid bonds)")
+    steps: int = key(100000, "steps", "sampling steps per replica (after equilibration)")
+    equilibration_steps: int = key(20000, "steps", "equilibration steps per replica")
+    report_interval: int = key(100, "steps", "steps between observable samples")
+    frame_interval: int = key(5000, "steps", "steps between trajectory frames (multiple of "
+                              "report_interval)")
+    seed: int = key(1, "", f"random seed (0 ... {MAX_SEED // MAX_REPLICAS})")
+    replicas: int = key(2, "", "independent replicas (their scatter is the error bar)")
+    workers: int = key(0, "", "processes running replicas at once; 0 = one per usable core")
+    timestep_safety: float = key(0.3, "", "time step = safety x 2 / (mobility x largest "
+                                 "stiffness)")
+    integrator: str = key("lm", "", "'lm' (Leimkuhler-Matthews: per-joint twist variance "
+                          "within 1 % of b/C at the default step) or 'euler' (Euler-Maruyama: "
+                          "+2 to +11 % measured)")
+
+    trap_parameter: ClassVar[str | None] = None
+    #: Observables whose convergence decides the verdict.
+    verdict_observables: ClassVar[tuple] = ("writhe_1", "writhe_2", "contact_length_nm")
+
+    # -- derived -----------------------------------------------------------------------
+    @property
+    def n_beads(self) -> int:
+        """Beads per ring (= bonds per ring)."""
+        return int(round(self.length_nm / self.bead_spacing_nm))
+
+    @property
+    def kT(self) -> float:
+        from ..units import kT
+
+        return kT(self.temperature_K)
+
+    @property
+    def effective_diameter_nm(self) -> float:
+        if self.diameter_nm > 0:
+            return float(self.diameter_nm)
+        return forcefield.salt_parameters(self.salt_mM).diameter_nm
+
+    @property
+    def contact_distance_nm(self) -> float:
+        if self.contact_nm > 0:
+            return float(self.contact_nm)
+        return self.effective_diameter_nm + 2.0 * forcefield.salt_parameters(self.salt_mM).debye_nm
+
+    def dna(self) -> DNAParameters:
+        return DNAParameters.make(temperature_K=self.temperature_K,
+                                  bead_spacing_nm=self.bead_spacing_nm,
+                                  persistence_nm=self.persistence_nm,
+                                  stretch_modulus_pN=self.stretch_modulus_pN,
+                                  salt_mM=self.salt_mM, diameter_nm=self.diameter_nm)
+
+    def replica_seed(self, r: int) -> int:
+        return self.seed * MAX_REPLICAS + r
+
+    # -- keys ----------------------------------------------------------------------------
+    @classmethod
+    def resolve(cls, values: dict) -> dict:
+        if isinstance(values.get("alpha"), str):
+            if values["alpha"].strip().lower() != "salt":
+                raise SceneError(f"alpha (in pN): expected a number or 'salt', got "
+                                 f"{values['alpha']!r}")
+            salt = values.get("salt_mM", cls.salt_mM)
+            if isinstance(salt, bool) or not isinstance(salt, (int, float)) or not salt > 0:
+                raise SceneError(f"salt_mM={salt!r} mM: salt must be > 0 mM")
+            values["alpha"] = forcefield.chiral_parameters(float(salt))["alpha_pN"]
+        return values
+
+    def validate(self) -> None:
+        need = self.need
+        need(0 < self.salt_mM <= 5000, "salt_mM", "salt must be in (0, 5000] mM")
+        need(self.bead_spacing_nm > 0, "bead_spacing_nm", "must be > 0")
+        need(self.length_nm > 0, "length_nm", "must be > 0")
+        need(abs(self.n_beads - self.length_nm / self.bead_spacing_nm) < 1e-6, "length_nm",
+             f"must be a whole multiple of bead_spacing_nm={self.bead_spacing_nm}")
+        need(self.n_beads >= MIN_RING_BEADS, "length_nm",
+             f"gives {self.n_beads} beads per ring; need >= {MIN_RING_BEADS}")
+        need(self.n_beads <= MAX_RING_BEADS, "length_nm",
+             f"gives {self.n_beads} beads per ring (> {MAX_RING_BEADS}): too large")
+        need(self.n_beads % 2 == 0, "length_nm",
+             f"gives {self.n_beads} beads per ring; need an even number (the twist check "
+             "compares the two halves of a ring)")
+        need(self.rings in (1, 2), "rings", "must be 1 or 2")
+        need(self.link in (1, -1), "link", "must be +1 or -1 (a Hopf link)")
+        need(self.start in ("apart", "contact"), "start", "allowed: 'apart', 'contact'")
+        need(self.persistence_nm >= self.bead_spacing_nm, "persistence_nm",
+             "must be >= bead_spacing_nm")
+        need(self.bead_spacing_nm <= self.twist_persistence_nm <= 1000.0,
+             "twist_persistence_nm", "must be in [bead_spacing_nm, 1000] nm (DNA: 50-100 nm)")
+        need(abs(TWO_PI * self.delta_lk / self.n_beads) < math.pi / 4, "delta_lk",
+             f"{self.delta_lk} turns over {self.n_beads} joints is more than 45 deg per "
+             "joint: a bead chain cannot hold it (use more beads)")
+        need(abs(self.delta_lk) <= 0.1 * self.length_nm / 3.4 + 1, "delta_lk",
+             "|delta_lk| must be <= 10 % of the ring's helical turns (+1): sigma beyond "
+             "that melts DNA")
+        need(abs(self.alpha) <= 50.0, "alpha", "|alpha| must be <= 50 pN")
+        need(150 <= self.temperature_K <= 400, "temperature_K", "must be in [150, 400] K")
+        need(self.diameter_nm >= 0, "diameter_nm", "must be >= 0 (0 = from salt)")
+        need(self.contact_nm >= 0, "contact_nm", "must be >= 0 (0 = diameter + 2 Debye)")
+        need(self.stretch in ("bonds", "constraints"), "stretch",
+             "allowed: 'bonds', 'constraints'")
+        need(self.stretch_modulus_pN > 0, "stretch_modulus_pN", "must be > 0")
+        need(self.report_interval >= 1, "report_interval", "must be >= 1")
+        need(self.steps >= self.report_interval, "steps",
+             f"must be >= report_interval={self.report_interval}")
+        need(self.equilibration_steps >= 0, "equilibration_steps", "must be >= 0")
+        need(self.frame_interval >= self.report_interval
+             and self.frame_interval % self.report_interval == 0, "frame_interval",
+             f"must be a multiple of report_interval={self.report_interval}")
+        need(0 <= self.seed <= MAX_SEED // MAX_REPLICAS, "seed",
+             f"must be in [0, {MAX_SEED // MAX_REPLICAS}]")
+        need(1 <= self.replicas <= MAX_REPLICAS, "replicas", f"must be in [1, {MAX_REPLICAS}]")
+        need(self.workers >= 0, "workers", "must be >= 0 (0 = one per usable core)")
+        need(0 < self.timestep_safety <= 0.9, "timestep_safety", "must be in (0, 0.9]")
+        need(self.integrator in INTEGRATORS, "integrator", f"allowed: {', '.join(INTEGRATORS)}")
+        d = self.effective_diameter_nm
+        R = self.length_nm / TWO_PI
+        need(R > 2.0 * d, "length_nm", f"a ring of radius {R:.2f} nm cannot hold a linked ring "
+             f"of diameter {d:.2f} nm (need L > 4 pi Delta = {4 * math.pi * d:.1f} nm)")
+        k_kT = (self.stretch_modulus_pN / self.bead_spacing_nm / self.kT
+                if self.stretch == "bonds" else None)
+        barrier = passage_barrier_kT(self.bead_spacing_nm, d, k_kT)
+        s_kT = None if k_kT is None else self.stretch_modulus_pN / self.kT
+        need(barrier >= MIN_PASSAGE_BARRIER_KT, "bead_spacing_nm",
+             f"too coarse for the effective DNA diameter {d:.2f} nm at {self.salt_mM} mM: the "
+             f"rings could pass through each other (barrier {barrier:.1f} kT < "
+             f"{MIN_PASSAGE_BARRIER_KT} kT). Use bead_spacing_nm <= "
+             f"{max_bead_spacing_nm(d, s_kT):.2f}")
+
+    # -- build ---------------------------------------------------------------------------
+    def build(self) -> Model:
+        kit = ChainKit(self.dna())
+        d = kit.dna
+        gap = 1.3 * d.diameter_nm if self.start == "contact" else None
+        starts = hopf_start(self.n_beads, self.bead_spacing_nm, self.rings, self.link, gap)
+        rings = [kit.add_chain(p, "AB"[k], closed=True, fixed_first=False)
+                 for k, p in enumerate(starts)]
+        kit.add_stretch(self.stretch)
+        kit.add_bend()
+        n_excl = kit.add_excluded_volume(dna_only=True)
+        sides = [kit.add_ring_twist(r, self.twist_persistence_nm, delta_lk=self.delta_lk,
+                                    chain_id="FG"[k]) for k, r in enumerate(rings)]
+        if self.alpha != 0.0:
+            # Kornyshev chiral term between facing segments, the rings closed (seam
+            # segments included); its rate as in the tweezer scenes
+            kit.add_force(chiral_force(rings, self.alpha, delta_nm=d.diameter_nm,
+                                       debye_nm=d.debye_nm, bead_spacing_nm=d.bead_spacing_nm,
+                                       closed=True, name="chiral"), "chiral",
+                          rate=abs(self.alpha) * 0.1 / d.debye_nm**2 * 4.0 / d.zeta_bead)
+        kit.bound("stretch", "bend", "wca", "chiral", "twist_on_dna")
+        kit.bound("frame", "twist")
+        kit.sides = np.concatenate(sides)
+        kit.extra["rings"] = [np.asarray(r, int) for r in rings]
+        kit.extra["ring_sides"] = [np.asarray(s, int) for s in sides]
+        g = self.twist_persistence_nm * d.kT / self.bead_spacing_nm
+        params = {"n_exclusions": n_excl, "twist_g_pN_nm": g, "alpha_pN": self.alpha,
+                  "beads_per_ring": self.n_beads, "length_bp": self.length_nm / 0.34,
+                  "diameter_over_length": d.diameter_nm / self.length_nm,
+                  "contact_distance_nm": self.contact_distance_nm}
+        return kit.finish(self, safety=self.timestep_safety, params=params)
+
+    def observables(self, model: Model) -> list:
+        d = model.dna
+        rings = model.extra["rings"]
+        return [RingObservables(rings, model.extra["ring_sides"], self.delta_lk,
+                                self.link if self.rings == 2 else None,
+                                self.contact_distance_nm, self.bead_spacing_nm),
+                ChiralEnergy(rings, self.alpha, d.diameter_nm, d.debye_nm, d.bead_spacing_nm)]
+
+    def schedule(self) -> TurnSchedule:
+        """One point (no turns): equilibrate, then sample."""
+        return TurnSchedule((0.0,), turn_rate=None, equilibration_steps=self.equilibration_steps,
+                            sample_steps=self.steps, report_interval=self.report_interval,
+                            mode="independent")
+
+    def start_positions(self, model: Model, turns: float):
+        raise SceneError("the catenane scene has no turn values")
+
+    # -- summary -------------------------------------------------------------------------
+    def twist_half_variance_theory(self) -> float:
+        """<dTw_half^2> = L / (4 pi^2 C) (turns^2), exact for the model (module docstring)."""
+        return self.n_beads * self.bead_spacing_nm / (4 * math.pi**2 * self.twist_persistence_nm)
+
+    def point_summary(self, reps: list) -> dict:
+        """From the replicas' (samples, frames): means with errors, the checks, the verdict."""
+        S = [s for s, _ in reps]
+        F = [f for _, f in reps]
+        pt: dict = {"delta_lk": self.delta_lk, "alpha_pN": self.alpha}
+        for k in range(1, self.rings + 1):
+            for c in (f"twist_{k}", f"writhe_{k}"):
+                pt[c] = _summarise([s[c] for s in S])
+            pt[f"twist_half_variance_{k}"] = _summarise([s[f"dtw_half_{k}"] ** 2 for s in S],
+                                                        equilibration=None)
+            pt[f"writhe_variance_{k}"] = _between([np.var(s[f"writhe_{k}"]) for s in S])
+            pt[f"twist_variance_{k}"] = _between([np.var(s[f"twist_{k}"]) for s in S])
+            pt[f"writhe_abs_{k}"] = _summarise([np.abs(s[f"writhe_{k}"]) for s in S])
+        pt["twist_half_variance_theory"] = self.twist_half_variance_theory()
+        pt["lk_error_max"] = float(max(np.max(s["lk_error"]) for s in S))
+        pt["lk_conserved"] = bool(pt["lk_error_max"] < 1e-6)
+        if self.rings == 2:
+            lk12 = np.concatenate([s["lk12"] for s in S])
+            pt["lk12_min"], pt["lk12_max"] = float(lk12.min()), float(lk12.max())
+            pt["lk12_conserved"] = bool(np.all(np.abs(lk12 - self.link) < 1e-6))
+            pt["contact_length_nm"] = _summarise([s["contact_length_nm"] for s in S])
+            pt["contact_fraction"] = _between([np.mean(s["contact_length_nm"] > 0) for s in S])
+            # contact-averaged braid angle: per replica, over the samples in contact
+            # (weighted by contact length), then mean and error across replicas
+            per = []
+            for s in S:
+                w = s["contact_length_nm"]
+                eta = s["braid_angle_rad"]
+                ok = w > 0
+                per.append(float(np.sum(w[ok] * eta[ok]) / np.sum(w[ok])) if ok.any()
+                           else None)
+            pt["braid_angle_rad"] = _between(per)
+            pt["handedness"] = self.handedness(pt["braid_angle_rad"])
+            pt["chiral_energy_pN_nm"] = _summarise([f["chiral_energy_pN_nm"] for f in F])
+        pt["n_samples"] = int(sum(len(s["step"]) for s in S))
+        pt["n_frames"] = int(sum(len(f["step"]) for f in F))
+        pt["n_replicas"] = len(reps)
+        verdict = [(c, pt[c]) for c in self.verdict_observables
+                   if c in pt and pt[c]["mean"] is not None]
+        pt["converged"] = all(v.get("converged", False) for _, v in verdict)
+        pt["convergence_reason"] = "; ".join(f"{c}: {v.get('reason', '')}" for c, v in verdict
+                                             if not v.get("converged", False)) or "ok"
+        pt["effective_sample_size"] = {c: v.get("ess") for c, v in verdict}
+        return pt
+
+    @staticmethod
+    def handedness(eta: dict) -> str:
+        """'right' (eta < 0), 'left' (eta > 0) when the mean braid angle is 2 standard errors
+        from 0, else 'undetermined' (or 'no contact')."""
+        if eta["mean"] is None:
+            return "no contact"
+        if eta["sem"] is None or abs(eta["mean"]) < 2.0 * eta["sem"]:
+            return "undetermined"
+        return "right" if eta["mean"] < 0 else "left"
+
+    def units(self) -> dict:
+        return {"twist_i, writhe_i": "turns", "lk12": "Gauss linking number",
+                "contact_length_nm": "nm", "braid_angle_rad": "rad, folded into (-pi/2, "
+                "pi/2], < 0 right-handed (geometry.curves.crossing_angles)",
+                "chiral_energy_pN_nm": "pN nm", "twist_half_variance": "turns^2; theory "
+                "L / (4 pi^2 C)", "sem": "standard error across independent replicas"}
+
+    # -- run -----------------------------------------------------------------------------
+    def run(self, out: str, *, platform: str = "CPU", threads: int | None = None,
+            progress_factory=None) -> dict:
+        t0 = time.perf_counter()
+        check_platform(platform)
+        model = self.build()
+        rundir.prepare_out_dir(self, out)
+        sched = self.schedule()
+        obs = self.observables(model)
+        workers = self.workers or _usable_cores()
+        R = self.replicas
+        nw = max(1, min(workers, R)) if platform == "CPU" else 1
+        jobs = [(self.to_dict(), r, os.path.join(out, "replicas", f"r{r:02d}"), platform,
+                 threads if nw == 1 else 1) for r in range(R)]
+        bar = progress_factory(sched.total_steps * R) if progress_factory else None
+        try:
+            results = _run_jobs(jobs, nw, bar)
+        finally:
+            if bar:
+                bar.close()
+        pt = self.point_summary([reporters.read_point(r["dirs"][0]) for r in results])
+        wall = time.perf_counter() - t0
+        resumed = any(r["resumed"] for r in results)
+        total = sched.total_steps * R
+        dt_ns = model.timestep.time_step_ns
+        rundir.write_topology(os.path.join(out, "topology.pdb"), model.topology, model.positions)
+        sample_cols = {k: v for ob in obs if ob.every == "sample" for k, v in ob.columns.items()}
+        frame_cols = {k: v for ob in obs if ob.every == "frame" for k, v in ob.columns.items()}
+        reporters.combine(out, [d for r in results for d in r["dirs"]], model.topology,
+                          dt_ns * 1e3, self.frame_interval, sample_cols, frame_cols)
+        notes = [f"rings of {self.n_beads} beads ({self.length_nm / 0.34:.0f} bp), "
+                 f"Delta/L = {model.params['diameter_over_length']:.4f}; contact distance "
+                 f"{self.contact_distance_nm:.2f} nm"]
+        if resumed:
+            notes.append("resumed from checkpoints; wall_time_s counts this invocation only")
+        if not pt["converged"]:
+            notes.append("NOT CONVERGED: " + pt["convergence_reason"] + "; raise `steps` or "
+                         "`replicas`")
+        n_part = model.system.getNumParticles()
+        summary = rundir.Summary(
+            scene=self.to_dict(), wall_time_s=wall, platform=platform,
+            time_step_ps=dt_ns * 1e3, time_step_reason=model.timestep.reason,
+            relaxation_rates_per_ns=model.timestep.rates_per_ns, total_steps=total,
+            steps_per_second=total / wall if not resumed else None,
+            ns_per_bead_per_step=(wall / total / n_part * 1e9 * nw) if not resumed else None,
+            n_particles=n_part, forces=sorted(model.forces),
+            effective_diameter_nm=model.params["diameter_nm"],
+            bending_kappa_kT=model.params["kappa_kT"], units=self.units(), notes=notes,
+            versions=rundir.versions(), points=[pt], seed=self.seed,
+            integrator_seed=results[0]["integrator_seed"])
+        rundir.write_summary(os.path.join(out, "summary.json"), summary)
+        return summary.to_dict()
+
+    # -- CLI and sweeps ------------------------------------------------------------------
+    def report(self, summary: dict, out: str, file) -> None:
+        pt = summary["points"][0]
+
+        def fmt(d, p=3):
+            if d is None or d.get("mean") is None:
+                return "-"
+            sem = d.get("sem")
+            return f"{d['mean']:.{p}f}" + (f" +- {sem:.{p}f}" if sem is not None else "")
+
+        print(f"time step {summary['time_step_ps']:.4g} ps: {summary['time_step_reason']}",
+              file=file)
+        for n in summary["notes"]:
+            print(f"note: {n}", file=file)
+        print(f"delta_lk = {self.delta_lk:+d} per ring, alpha = {self.alpha:g} pN", file=file)
+        for k in range(1, self.rings + 1):
+            print(f"ring {k}: Tw = {fmt(pt[f'twist_{k}'])}, Wr = {fmt(pt[f'writhe_{k}'])} turns; "
+                  f"<dTw_half^2> = {fmt(pt[f'twist_half_variance_{k}'], 4)} turns^2 (theory "
+                  f"L/(4 pi^2 C) = {pt['twist_half_variance_theory']:.4f})", file=file)
+        print(f"Tw + Wr = Lk_i: largest deviation {pt['lk_error_max']:.2e} turns", file=file)
+        if self.rings == 2:
+            print(f"Lk_12 stayed in [{pt['lk12_min']:.6f}, {pt['lk12_max']:.6f}]", file=file)
+            print(f"contact length {fmt(pt['contact_length_nm'], 1)} nm (in contact "
+                  f"{fmt(pt['contact_fraction'], 2)} of the time); braid angle "
+                  f"{fmt(pt['braid_angle_rad'])} rad -> handedness {pt['handedness']}; chiral "
+                  f"energy {fmt(pt['chiral_energy_pN_nm'], 2)} pN nm", file=file)
+        print(f"converged: {pt['converged']} ({pt['convergence_reason']}); "
+              "+- : standard error across independent replicas", file=file)
+        print(f"wall time {summary['wall_time_s']:.1f} s on {summary['platform']}; results in "
+              f"{out}/", file=file)
+
+    row_columns: ClassVar[tuple] = ("delta_lk", "alpha_pN", "writhe_1", "writhe_1_sem",
+                                    "writhe_2", "writhe_2_sem", "braid_angle_rad",
+                                    "braid_angle_sem_rad", "handedness", "contact_length_nm",
+                                    "lk_conserved", "lk12_conserved", "converged", "n_samples")
+
+    def rows(self, summary: dict) -> list[dict]:
+        pt = summary["points"][0]
+
+        def g(c, f="mean"):
+            return pt.get(c, {}).get(f) if isinstance(pt.get(c), dict) else None
+
+        return [{"delta_lk": pt["delta_lk"], "alpha_pN": pt["alpha_pN"],
+                 "writhe_1": g("writhe_1"), "writhe_1_sem": g("writhe_1", "sem"),
+                 "writhe_2": g("writhe_2"), "writhe_2_sem": g("writhe_2", "sem"),
+                 "braid_angle_rad": g("braid_angle_rad"),
+                 "braid_angle_sem_rad": g("braid_angle_rad", "sem"),
+                 "handedness": pt.get("handedness"),
+                 "contact_length_nm": g("contact_length_nm"),
+                 "lk_conserved": pt["lk_conserved"], "lk12_conserved": pt.get("lk12_conserved"),
+                 "converged": pt["converged"], "n_samples": pt["n_samples"]}]
+
+    def default_short_run(self) -> dict:
+        return {"steps": 4000, "equilibration_steps": 1000, "frame_interval": 1000}
