@@ -17,6 +17,8 @@ import os
 from .. import tomlio
 from .base import KeyInfo, Scene, SceneError, key
 from .braid import Braid
+from .catenane import Catenane
+from .closed import Closed
 from .knot import Knot
 from .plectoneme import Plectoneme
 from .tether import Tether
@@ -25,7 +27,8 @@ __all__ = ["SCENES", "KeyInfo", "Scene", "SceneError", "key", "make_scene", "par
            "scene_class"]
 
 #: The registry: scene name -> scene class (in the order `dnabraid scenes` lists them).
-SCENES: dict[str, type[Scene]] = {c.name: c for c in (Braid, Tether, Plectoneme, Knot)}
+SCENES: dict[str, type[Scene]] = {c.name: c for c in (Braid, Tether, Plectoneme, Knot, Catenane,
+                                                         Closed)}
 
 parse_value = tomlio.parse_value
 
