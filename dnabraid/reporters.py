@@ -20,7 +20,6 @@ from __future__ import annotations
 import csv
 import math
 import os
-
 import warnings
 
 import numpy as np

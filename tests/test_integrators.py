@@ -11,8 +11,12 @@ import openmm
 import pytest
 from openmm import unit as u
 
-from dnabraid.engine import (GAMMA_PER_PS, KB_KJ_PER_MOL_K, euler_maruyama_integrator,
-                             leimkuhler_matthews_integrator)
+from dnabraid.engine import (
+    GAMMA_PER_PS,
+    KB_KJ_PER_MOL_K,
+    euler_maruyama_integrator,
+    leimkuhler_matthews_integrator,
+)
 
 N = 2000          # independent particles
 K = 100.0         # kJ/mol/nm^2

@@ -57,8 +57,8 @@ def replicate_system(system: openmm.System, R: int) -> openmm.System:
         elif name == "CustomAngleForce":
             for r in range(1, R):
                 for k in range(f.getNumAngles()):
-                    i, j, l, p = f.getAngleParameters(k)
-                    g.addAngle(i + r * N, j + r * N, l + r * N, p)
+                    i, j, m, p = f.getAngleParameters(k)
+                    g.addAngle(i + r * N, j + r * N, m + r * N, p)
         elif name == "CustomExternalForce":
             for r in range(1, R):
                 for k in range(f.getNumParticles()):

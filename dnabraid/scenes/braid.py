@@ -23,7 +23,6 @@ from ..forces import bead_exclusion_force, pull_force, stretch_force, trap_force
 from ._tweezer import TurnedScene, lockup_turns
 from .base import SceneError, key
 
-
 #: values of the ``mirror`` key
 MIRROR_MODES = ("off", "original", "image")
 #: largest bow of an overdispersed start's braid axis, as a fraction of the strand length
