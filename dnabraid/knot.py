@@ -4,7 +4,11 @@ What is built
 -------------
 An elastic rod of radius ``h`` and bending stiffness ``B = EI`` (pN nm^2), discretised into
 beads ``b`` apart (harmonic bonds of stretch modulus ``S``, hinges ``U = (B/b)(1 - cos beta)``,
-self-contact ``U = k/2 (2h - r)^2`` for ``r < 2h``: :mod:`dnabraid.forces.contact`), tied
+self-contact ``U = k/2 (2h - r)^2`` for ``r < 2h``, with ``r`` the distance between beads
+(:mod:`dnabraid.forces.contact`, ``contact="beads"``) or the closest distance between the
+straight segments joining them (:mod:`dnabraid.forces.segment_contact`,
+``contact="segments"``: a smooth tube; beads make a corrugated surface whose slope acts as
+static friction, ~ b / (4h), and pins the loop: issue 14, item 1)), tied
 into an open ``(2, 2n+1)`` torus knot (``n = 1`` trefoil, ``n = 2`` cinquefoil; ``n`` is the
 unknotting number of seed 001) and pulled by a tension ``T`` at both ends. There is no
 tweezer bead, no surface, no electrostatics and no temperature: the scene leaves them out.
@@ -26,8 +30,12 @@ scene would integrate) and the largest OpenMM force left is reported.
 What is measured (:func:`measure`) and against which theory
 ------------------------------------------------------------
 * loop radius: ``R_dL = Delta L / (2 pi)``, the shortening over 2 pi as in the experiments
-  of seed 002 (below Eq. 9), and ``R_apex`` = half the loop's largest distance from the
-  axis; against ``T = EI / (2 R^2)`` (seed 002, Eq. 1, no friction);
+  of seed 002 (below Eq. 9), ``R_apex`` = half the loop's largest distance from the
+  axis (sensitive to the tails' length: the knot's base sits O(h) off the axis), and
+  ``R_curv`` = 1 / curvature at that apex; against ``T = EI / (2 R^2)`` (seed 002, Eq. 1,
+  no friction). With frictionless contact ``H = B kappa^2 / 2 + N . t`` is conserved
+  along the rod and equals ``T``, so ``R_curv`` differs from Eq. 1 by the loop's internal
+  force ``N`` (zero only as eps -> 0);
 * braid length ``l``: the distance between the outermost apparent crossings of the two
   strands seen along the loop's normal (seed 002: ``v(w_c) = 0``); against
   ``l = 2 w_c sqrt(2 h R)`` (seed 002, Eq. 7; ``w_c`` from :mod:`dnabraid.continuum.knot`);
@@ -53,7 +61,12 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 from scipy.spatial import cKDTree
 
+from .forces import segment_contact as segc
 from .forces.contact import contact_exclusion_range
+
+#: Self-contact models of the rod: between beads (spheres of radius h) or between the
+#: segments joining them (a tube of radius h round the polyline; see issue 14, item 1).
+CONTACT_MODELS = ("beads", "segments")
 
 
 class KnotError(RuntimeError):
@@ -72,6 +85,12 @@ class KnotRod:
     stretch_modulus_pN: float = 1000.0    #: S (bond stiffness S / b)
     contact_stiffness_pN_nm: float = 2000.0  #: k of the contact penalty
     tail_factor: float = 1.5              #: tail length / sqrt(B / T)
+    contact: str = "segments"             #: "segments" or "beads" (CONTACT_MODELS)
+
+    def __post_init__(self):
+        if self.contact not in CONTACT_MODELS:
+            raise ValueError(f"KnotRod.contact must be one of {CONTACT_MODELS}, got "
+                             f"{self.contact!r}")
 
     @property
     def radius_theory_nm(self) -> float:
@@ -166,6 +185,25 @@ class _Problem:
         return np.array([0, 1, N - 2, N - 1])
 
 
+def _segment_pairs(x, rod: KnotRod):
+    """Segment pairs (indices of the segments (i, i+1)) closer than 2h, neighbours along
+    the rod excluded: segments s, s+m with m <= exclusion_range (their nearest beads are
+    then at least exclusion_range * b >= 2.5 h apart along the rod, as for the beads)."""
+    return segc.segment_pairs(x, segc.chain_segments(len(x)), 2.0 * rod.thickness_nm,
+                              min_separation=rod.exclusion_range)
+
+
+def _contact_energy(x, rod: KnotRod) -> float:
+    if rod.contact == "segments":
+        return segc.contact_energy(x, segc.chain_segments(len(x)), _segment_pairs(x, rod),
+                                   2.0 * rod.thickness_nm, rod.contact_stiffness_pN_nm)
+    p = _pairs(x, rod)
+    if not len(p):
+        return 0.0
+    rr = np.linalg.norm(x[p[:, 1]] - x[p[:, 0]], axis=1)
+    return float(0.5 * rod.contact_stiffness_pN_nm * np.sum((2 * rod.thickness_nm - rr) ** 2))
+
+
 def _pairs(x, rod: KnotRod):
     d0 = 2.0 * rod.thickness_nm
     p = np.array(sorted(cKDTree(x).query_pairs(d0)), dtype=int).reshape(-1, 2)
@@ -179,14 +217,11 @@ def energy_terms(x, prob: _Problem) -> dict:
     d = np.diff(x, axis=0)
     r = np.linalg.norm(d, axis=1)
     out = {"stretch": 0.5 * rod.stretch_modulus_pN / b * np.sum((r - b) ** 2)}
-    c = np.sum(d[:-1] * d[1:], axis=1) / (r[:-1] * r[1:])
-    out["bend"] = rod.bending_stiffness_pN_nm2 / b * np.sum(1.0 - c)
-    p = _pairs(x, rod)
-    if len(p):
-        rr = np.linalg.norm(x[p[:, 1]] - x[p[:, 0]], axis=1)
-        out["contact"] = 0.5 * rod.contact_stiffness_pN_nm * np.sum((2 * rod.thickness_nm - rr) ** 2)
-    else:
-        out["contact"] = 0.0
+    # 1 - cos(beta) = |u/|u| - v/|v||^2 / 2: no cancellation when beta is small (the sliding
+    # mode's energy changes are ~1e-11 pN nm, below the rounding of sum(1 - u.v/|u||v|))
+    t = d / r[:, None]
+    out["bend"] = rod.bending_stiffness_pN_nm2 / b * 0.5 * np.sum((t[1:] - t[:-1]) ** 2)
+    out["contact"] = _contact_energy(x, rod)
     out["pull"] = -rod.tension_pN * (x[-1, 2] - x[0, 2])
     out["ends"] = 0.5 * prob.k_side * np.sum((x[prob.clamped, :2] - prob.anchors) ** 2)
     return out
@@ -238,7 +273,7 @@ def gradient_hessian(x, prob: _Problem, *, gauss_newton: bool = True):
     gd, Hd = _pair_blocks(d, r, rod.stretch_modulus_pN / b, b, gauss_newton)
     add_pair(i, i + 1, gd, Hd)
     # contacts
-    p = _pairs(x, rod)
+    p = _pairs(x, rod) if rod.contact == "beads" else ()
     if len(p):
         dc = x[p[:, 1]] - x[p[:, 0]]
         rc = np.linalg.norm(dc, axis=1)
@@ -292,6 +327,12 @@ def gradient_hessian(x, prob: _Problem, *, gauss_newton: bool = True):
         vals.append(np.full(len(cl), prob.k_side))
     H = sp.coo_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
                       shape=(3 * N, 3 * N)).tocsr()
+    if rod.contact == "segments":
+        gc, Hc = segc.contact_gradient_hessian(
+            x, segc.chain_segments(N), _segment_pairs(x, rod), 2.0 * rod.thickness_nm,
+            rod.contact_stiffness_pN_nm, gauss_newton=gauss_newton)
+        g += gc
+        H = H + Hc
     return g.ravel(), H
 
 
@@ -400,6 +441,15 @@ def _lowest_mode(x, prob: _Problem):
 
 
 def max_overlap(x, rod: KnotRod) -> float:
+    """Largest overlap 2h - d (nm) of the contact model (0 if nothing touches)."""
+    if rod.contact == "segments":
+        seg = segc.chain_segments(len(x))
+        p = _segment_pairs(x, rod)
+        if not len(p):
+            return 0.0
+        d = segc.segment_distance(x[seg[p[:, 0], 0]], x[seg[p[:, 0], 1]],
+                                  x[seg[p[:, 1], 0]], x[seg[p[:, 1], 1]])[0]
+        return float(2 * rod.thickness_nm - d.min())
     p = _pairs(x, rod)
     if not len(p):
         return 0.0
@@ -408,8 +458,16 @@ def max_overlap(x, rod: KnotRod) -> float:
 
 # -- OpenMM twin -------------------------------------------------------------------------------
 
-def build_system(rod: KnotRod, x0):
-    """The OpenMM System of the knot scene (same energy as :func:`energy`)."""
+def build_system(rod: KnotRod, x0, x_contacts=None, *, contact_cutoff_nm: float | None = None):
+    """The OpenMM System of the knot scene (same energy as :func:`energy`).
+
+    ``x0`` sets the end anchors. With ``rod.contact == "segments"`` the contact is a
+    fixed list of segment pairs (:func:`dnabraid.forces.segment_contact.segment_contact_force`):
+    without ``contact_cutoff_nm``, the pairs closer than 2h at ``x_contacts`` (default
+    ``x0``) with their clamping cases frozen there (exact at ``x_contacts``: a check of a
+    relaxed state); with it, every pair closer than the cutoff, in the general (slow to
+    build) expression, for a System that moves.
+    """
     import openmm
 
     from .forces import bending_force, contact_force, stretch_force
@@ -424,8 +482,20 @@ def build_system(rod: KnotRod, x0):
     system.addForce(stretch_force([(i, i + 1) for i in range(N - 1)], rod.stretch_modulus_pN / b, b))
     system.addForce(bending_force([(i, i + 1, i + 2) for i in range(N - 2)],
                                   rod.bending_stiffness_pN_nm2 / b))
-    system.addForce(contact_force(N, rod.thickness_nm, rod.contact_stiffness_pN_nm,
-                                  exclusion_range=rod.exclusion_range))
+    if rod.contact == "segments":
+        xc = np.asarray(x0 if x_contacts is None else x_contacts, float)
+        seg = segc.chain_segments(N)
+        cut = 2.0 * rod.thickness_nm if contact_cutoff_nm is None else float(contact_cutoff_nm)
+        p = segc.segment_pairs(xc, seg, cut, min_separation=rod.exclusion_range)
+        # a static check (no cutoff given) freezes each pair's clamping case at xc: exact
+        # there, and fast to build (the general Lepton expression takes ~10 s or more)
+        system.addForce(segc.segment_contact_force(
+            np.column_stack([seg[p[:, 0]], seg[p[:, 1]]]).reshape(-1, 4),
+            2.0 * rod.thickness_nm, rod.contact_stiffness_pN_nm, name="contact",
+            frozen_at=xc if contact_cutoff_nm is None else None))
+    else:
+        system.addForce(contact_force(N, rod.thickness_nm, rod.contact_stiffness_pN_nm,
+                                      exclusion_range=rod.exclusion_range))
     ends = openmm.CustomExternalForce("-ends_f*z + 0.5*ends_k*((x-x0)^2+(y-y0)^2)")
     ends.setName("ends")
     ends.addGlobalParameter("ends_k", prob.k_side * C)
@@ -445,7 +515,7 @@ def openmm_forces(rod: KnotRod, x, x0=None, platform: str = "Reference"):
 
     from .units import PN_NM_IN_KJ_MOL as C
 
-    system = build_system(rod, x if x0 is None else x0)
+    system = build_system(rod, x if x0 is None else x0, x_contacts=x)
     ctx = openmm.Context(system, openmm.VerletIntegrator(1e-3),
                          openmm.Platform.getPlatformByName(platform))
     ctx.setPositions(np.asarray(x) * unit.nanometer)
@@ -499,8 +569,15 @@ def measure(x, rod: KnotRod) -> dict:
     sep = np.hypot(ub, vb)
     R_dL = (L - D) / (2 * math.pi)
     R_apex = float(rho[apex]) / 2.0
+    # radius of curvature at the apex: 1 / rms of |dt/ds| over the 5 hinges round it
+    seg = np.diff(x, axis=0)
+    sl = np.linalg.norm(seg, axis=1)
+    tan = seg / sl[:, None]
+    kap = np.linalg.norm(np.diff(tan, axis=0), axis=1) / (0.5 * (sl[1:] + sl[:-1]))
+    hinge = min(max(apex - 1, 2), len(kap) - 3)  # hinge index of bead `apex`
+    R_curv = float(1.0 / math.sqrt(np.mean(kap[hinge - 2:hinge + 3] ** 2)))
     return {"contour_nm": L, "end_to_end_nm": D, "shortening_nm": L - D,
-            "radius_dL_nm": R_dL, "radius_apex_nm": R_apex,
+            "radius_dL_nm": R_dL, "radius_apex_nm": R_apex, "radius_curvature_nm": R_curv,
             "braid_length_nm": ell, "crossings": len(zc), "winding_turns": winding / (2 * math.pi),
             "wave_number_per_nm": k,
             "min_half_separation_over_h": float(sep[inb].min() / h),
@@ -519,6 +596,7 @@ def compare(rod: KnotRod, *, radius_factor: float = 1.0, braid_factor: float = 1
            "tension_pN": T, **m,
            "tension_ratio_dL": 2 * T * m["radius_dL_nm"] ** 2 / B,
            "tension_ratio_apex": 2 * T * m["radius_apex_nm"] ** 2 / B,
+           "tension_ratio_curvature": 2 * T * m["radius_curvature_nm"] ** 2 / B,
            "braid_length_theory_nm": braid_length_theory(rod.n, h, R_th),
            "wave_number_theory_per_nm": wave_number_theory(h, R_th),
            "iterations": res["iterations"], "max_force_pN": res["max_force_pN"],

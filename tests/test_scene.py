@@ -31,7 +31,10 @@ def test_each_scene_declares_its_own_keys():
     assert "tether_separation_nm" not in keys["tether"] | keys["plectoneme"] | keys["knot"]
     assert "self_avoidance" in keys["tether"] and "self_avoidance" not in keys["braid"]
     assert keys["knot"] == {"knot_n", "tension_pN", "rod_radius_nm",
-                            "bending_stiffness_pN_nm2", "bead_spacing_nm", "start_loop_factor"}
+                            "bending_stiffness_pN_nm2", "bead_spacing_nm", "start_loop_factor",
+                            "contact"}
+    assert "tether_separation_nm" not in keys["closed"] | keys["catenane"]
+    assert "force_pN" not in keys["closed"] | keys["catenane"]  # no tweezer bead
     for c in SCENES.values():
         for info in c.keys().values():
             assert info.help, info.name

@@ -2,8 +2,9 @@
 pulled by a tension T at both ends, relaxed at zero temperature.
 
 No tweezer bead, surface, electrostatics or temperature: the rod is made of beads
-(harmonic bonds, hinges (B/b)(1 - cos beta)) with self-contact at 2h, relaxed by the damped
-Newton method of :mod:`dnabraid.knot`. Measured loop radius, braid length and wave number
+(harmonic bonds, hinges (B/b)(1 - cos beta)) with self-contact at 2h (key ``contact``: between
+the segments joining the beads, a smooth tube (default), or between the beads, a corrugated
+one that pins the loop), relaxed by the damped Newton method of :mod:`dnabraid.knot`. Measured loop radius, braid length and wave number
 are compared with the continuum theory: T = EI / (2 R^2) and l = 2 w_c sqrt(2 h R)
 (Audoly, Clauvelin & Neukirch 2007, Eqs. 1 and 7) and k = (sqrt(12) h R)^(-1/2) (Jawed,
 Dieleman, Audoly & Reis 2015, Eq. 3).
@@ -29,6 +30,16 @@ MAX_KNOT_EPS = 0.55
 MAX_KNOT_BEADS = 20000
 
 
+_CONTACT_NOTES = {
+    "beads": "zero temperature: Newton minimum of the bead rod; the bead-bead contact pins "
+             "sliding, so the loop radius depends on the start (start_loop_factor); see "
+             "workflows/results/knot_crosscheck.md",
+    "segments": "zero temperature: Newton minimum of the bead rod with segment-segment contact "
+                "(frictionless sliding: the start does not matter); the theory is the leading "
+                "order in eps, see workflows/results/knot_band.md for its O(eps) corrections",
+}
+
+
 @dataclasses.dataclass(frozen=True)
 class Knot(Scene):
     name: ClassVar[str] = "knot"
@@ -46,6 +57,10 @@ class Knot(Scene):
     bead_spacing_nm: float = key(0.5, "nm", "distance b between beads along the rod")
     start_loop_factor: float = key(1.0, "", "loop radius of the starting shape / sqrt(B / 2T) "
                                    "(> 1 tightens, < 1 loosens; the bead contact pins sliding)")
+    contact: str = key("segments", "", "self-contact model: 'segments' (closest distance "
+                       "between the straight segments joining the beads: a smooth tube, the "
+                       "loop slides freely; default) or 'beads' (between beads: a corrugated "
+                       "surface whose static friction ~ b/(4h) pins the loop; issue 14)")
 
     def validate(self) -> None:
         need = self.need
@@ -55,6 +70,10 @@ class Knot(Scene):
         need(self.bending_stiffness_pN_nm2 > 0, "bending_stiffness_pN_nm2", "must be > 0")
         need(self.bead_spacing_nm > 0, "bead_spacing_nm", "must be > 0")
         need(0.5 <= self.start_loop_factor <= 2.0, "start_loop_factor", "must be in [0.5, 2]")
+        from ..knot import CONTACT_MODELS
+
+        need(self.contact in CONTACT_MODELS, "contact",
+             f"must be one of {', '.join(map(repr, CONTACT_MODELS))}")
         need(self.bead_spacing_nm <= self.rod_radius_nm, "bead_spacing_nm",
              f"must be <= rod_radius_nm={self.rod_radius_nm} (coarser beads let the strands "
              "slip through each other and corrugate the contact)")
@@ -77,7 +96,8 @@ class Knot(Scene):
 
         return KnotRod(n=self.knot_n, thickness_nm=self.rod_radius_nm,
                        bending_stiffness_pN_nm2=self.bending_stiffness_pN_nm2,
-                       tension_pN=self.tension_pN, bead_spacing_nm=self.bead_spacing_nm)
+                       tension_pN=self.tension_pN, bead_spacing_nm=self.bead_spacing_nm,
+                       contact=self.contact)
 
     def run(self, out: str, *, platform: str = "CPU", threads: int | None = None,
             progress_factory=None) -> dict:
@@ -105,7 +125,9 @@ class Knot(Scene):
             "wall_time_s": time.perf_counter() - t0, "newton_iterations": r["iterations"],
             "converged": r["converged"], "max_force_pN": r["max_force_pN"],
             "openmm_max_force_pN": r["openmm_max_force_pN"],
-            "measured": {k: r[k] for k in ("radius_apex_nm", "radius_dL_nm", "braid_length_nm",
+            "contact": rod.contact,
+            "measured": {k: r[k] for k in ("radius_apex_nm", "radius_dL_nm",
+                                           "radius_curvature_nm", "braid_length_nm",
                                            "wave_number_per_nm", "winding_turns",
                                            "shortening_nm", "max_overlap_nm", "crossings")},
             "theory": {"radius_nm": rod.radius_theory_nm,
@@ -117,13 +139,12 @@ class Knot(Scene):
                                   " (Jawed, Dieleman, Audoly & Reis 2015, Eq. 3)"},
             "ratios": {"2TR_apex^2/B": r["tension_ratio_apex"],
                        "2TR_dL^2/B": r["tension_ratio_dL"],
+                       "2TR_curv^2/B": r["tension_ratio_curvature"],
                        "l/l_theory": r["braid_ratio"], "k/k_theory": r["wave_number_ratio"]},
             "units": {"lengths": "nm", "forces": "pN", "wave_number": "1/nm",
                       "winding": "turns of the strands' half-difference between the outermost "
                                  "apparent crossings"},
-            "notes": ["zero temperature: Newton minimum of the bead rod; the discrete contact "
-                      "pins sliding, so the loop radius depends on the start "
-                      "(start_loop_factor); see workflows/results/knot_crosscheck.md"],
+            "notes": [_CONTACT_NOTES[self.contact]],
             "versions": rundir.versions(),
         }
         rundir.write_summary(os.path.join(out, "summary.json"), summary)
