@@ -358,6 +358,11 @@ class ChainKit:
                    for c, cl in zip(self.chains, self.closed)):
             raise ValueError("add_ring_twist: the particles are not a closed chain of this kit "
                              "(add it with add_chain(..., closed=True) first)")
+        for name, v in (("twist_persistence_nm", twist_persistence_nm),
+                        ("arm_fraction", arm_fraction), ("k_fraction", k_fraction),
+                        ("friction_fraction", friction_fraction)):
+            if not (np.isfinite(v) and v > 0):
+                raise ValueError(f"add_ring_twist: {name} must be finite and > 0, got {v!r}")
         d = self.dna
         b = d.bead_spacing_nm
         arm = arm_fraction * b
@@ -378,11 +383,13 @@ class ChainKit:
                 f_springs.addBond(*springs.getBondParameters(k))
             for k in range(joints.getNumBonds()):
                 f_twist.addBond(*joints.getBondParameters(k))
-        self.rates["frame"] = 4.0 * k_f / zeta_f
-        self.rates["twist"] = 6.0 * g / (arm * arm * zeta_f)
-        # on the DNA beads: the frame springs' reaction 4 k_f and the twist through the
-        # tangents, bounded by 12 g / b^2 (three joints touch a bead)
-        self.rates["twist_on_dna"] = (4.0 * k_f + 12.0 * g / b**2) / d.zeta_bead
+        # the stiffest ring sets the rates (several rings may differ)
+        for term, rate in (("frame", 4.0 * k_f / zeta_f),
+                           ("twist", 6.0 * g / (arm * arm * zeta_f)),
+                           # on the DNA beads: the frame springs' reaction 4 k_f and the
+                           # twist through the tangents, bounded by 12 g / b^2 (three joints)
+                           ("twist_on_dna", (4.0 * k_f + 12.0 * g / b**2) / d.zeta_bead)):
+            self.rates[term] = max(rate, self.rates.get(term, 0.0))
         return sides
 
     def add_wall(self) -> None:

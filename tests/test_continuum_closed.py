@@ -269,13 +269,15 @@ def test_relaxed_ply_converges_in_harmonics(relaxed_link4):
 
 def test_relaxed_hopf_link_is_two_round_circles():
     """n = 1: the two rings relax to round circles of length L (energy 2 x (B/2) (2 pi)^2 / L)
-    that touch without pressing (p = 0 to 1e-3 of the uniform ply's 15.6 B/L^3)."""
+    that touch without pressing (p = 0 to 2e-2 of the uniform ply's 15.6 B/L^3)."""
     res = cc.relax_closed_ply(1, D, "link", harmonics=1)
     v = res.values
     assert v["energy_B_per_L"] == pytest.approx(4 * math.pi**2, rel=1e-8)
     p0 = cc.uniform_pressure(1, D)
-    assert abs(v["pressure_min_B_per_L3"]) < 0.05 * p0 and abs(v["pressure_max_B_per_L3"]) \
-        < 0.05 * p0
+    # measured |p| <= 0.0103 p0 (the Kirchhoff pressure of a contact that carries nothing is
+    # the residual of the one-harmonic fit); a pressing contact would give p ~ p0
+    assert abs(v["pressure_min_B_per_L3"]) < 0.02 * p0 and abs(v["pressure_max_B_per_L3"]) \
+        < 0.02 * p0
     x1, x2 = res.solution["strands"]
     assert gauss_linking_number(x1, x2) == pytest.approx(-1, abs=TOL_INTEGER)
 

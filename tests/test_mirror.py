@@ -73,3 +73,10 @@ def test_paired_asymmetry_parity_and_bad_input():
 def test_bad_mirror_value_is_refused():
     with pytest.raises(SceneError, match="mirror"):
         make_scene("braid", {"mirror": "left"})
+
+
+def test_one_pair_is_refused():
+    o = {"points": [{"turns": 1.0, "extension_nm": {"replica_means": [10.0], "sem": 1.0}}]}
+    i = {"points": [{"turns": -1.0, "extension_nm": {"replica_means": [9.0], "sem": 1.0}}]}
+    with pytest.raises(ValueError, match="at least 2 replica pairs"):
+        paired_asymmetry(o, i)

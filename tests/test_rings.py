@@ -333,3 +333,25 @@ def test_chiral_term_on_two_rings_matches_twin_and_fd():
                                           subdivisions=q, closed=False, **kw)
     assert e_ref != 0.0 and e_ref != pytest.approx(e_open, rel=1e-3)  # the seams matter
     _assert_twin_and_fd(openmm_energy_forces(force, pos), twin, pos, [0, n - 1, n, 2 * n - 1], 6)
+
+
+@pytest.mark.parametrize("bad", [{"twist_persistence_nm": 0.0}, {"twist_persistence_nm": -50.0},
+                                 {"twist_persistence_nm": float("nan")},
+                                 {"twist_persistence_nm": 50.0, "k_fraction": 0.0}])
+def test_ring_twist_refuses_bad_stiffness(bad):
+    """A zero, negative or NaN twist stiffness would give a zero or negative rate and a
+    meaningless time step: refused with the parameter's name."""
+    import numpy as np
+
+    from dnabraid.chains import ChainKit, DNAParameters
+
+    d = DNAParameters.make(temperature_K=298.15, bead_spacing_nm=3.0, persistence_nm=50.0,
+                           stretch_modulus_pN=1000.0, salt_mM=1000.0)
+    kit = ChainKit(d)
+    t = np.linspace(0, 2 * np.pi, 20, endpoint=False)
+    r = 20 * 3.0 / (2 * np.pi)
+    ring = kit.add_chain(np.c_[r * np.cos(t), r * np.sin(t), 0 * t], "A", closed=True,
+                         fixed_first=False)
+    name = [k for k in bad if k != "twist_persistence_nm"] or ["twist_persistence_nm"]
+    with pytest.raises(ValueError, match=name[0]):
+        kit.add_ring_twist(ring, **bad)

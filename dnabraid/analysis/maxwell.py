@@ -64,6 +64,10 @@ def torque_from_extension(forces_pN, turns, extension_nm, torque_ref_pN_nm, *,
     if F.ndim != 1 or n.ndim != 1 or z.shape != (F.size, n.size):
         raise ValueError(f"extension_nm must have shape (len(forces), len(turns)) = "
                          f"({F.size}, {n.size}), got {z.shape}")
+    for name, v in (("forces_pN", F), ("turns", n), ("extension_nm", z),
+                    ("torque_ref_pN_nm", g0)):
+        if not np.all(np.isfinite(v)):
+            raise ValueError(f"{name} must be finite")
     if n.size < 2 or np.any(np.diff(n) <= 0) or np.any(np.diff(F) <= 0):
         raise ValueError("forces and turns must be strictly increasing, with >= 2 turn values")
     if g0.shape != (n.size,):
@@ -75,8 +79,13 @@ def torque_from_extension(forces_pN, turns, extension_nm, torque_ref_pN_nm, *,
     out = {"forces_pN": F, "turns": n, "torque_pN_nm": torque, "ref_force_pN": F[ref_index]}
     if extension_sem_nm is not None:
         s = np.broadcast_to(np.asarray(extension_sem_nm, float), z.shape).ravel()
+        if not np.all(np.isfinite(s)) or np.any(s < 0):
+            raise ValueError("extension_sem_nm must be finite and >= 0")
         var = (A * A) @ (s * s)
         if torque_ref_sem_pN_nm is not None:
-            var = var + np.tile(np.asarray(torque_ref_sem_pN_nm, float) ** 2, F.size)
+            sg = np.asarray(torque_ref_sem_pN_nm, float)
+            if sg.shape != (n.size,) or not np.all(np.isfinite(sg)) or np.any(sg < 0):
+                raise ValueError(f"torque_ref_sem_pN_nm must be {n.size} finite values >= 0")
+            var = var + np.tile(sg**2, F.size)
         out["sem_pN_nm"] = np.sqrt(var).reshape(F.size, n.size)
     return out

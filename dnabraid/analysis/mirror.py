@@ -82,8 +82,11 @@ def paired_asymmetry(original: dict, image: dict, column: str = "extension_nm",
             raise ValueError(f"turns={n:g}: {a.size} original and {b.size} image replicas")
         d = a + sign * b
         R = d.size
-        sem = float(np.std(d, ddof=1) / math.sqrt(R)) if R > 1 else float("nan")
-        t = float(stats.t.ppf(0.5 + confidence / 2, R - 1)) if R > 1 else float("nan")
+        if R < 2:
+            raise ValueError(f"turns={n:g}: a paired error needs at least 2 replica pairs, "
+                             f"got {R}")
+        sem = float(np.std(d, ddof=1) / math.sqrt(R))
+        t = float(stats.t.ppf(0.5 + confidence / 2, R - 1))
         su = math.hypot(float(p[column]["sem"]), float(q[column]["sem"]))
         out.append({"turns": n, "column": column, "asymmetry": float(np.mean(d)), "sem": sem,
                     "ci_halfwidth": t * sem, "confidence": confidence,

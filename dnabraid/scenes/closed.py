@@ -30,7 +30,7 @@ from .base import Scene, SceneError, key
 MAX_CLOSED_BEADS = 8000
 
 #: The seed's numbers (van der Heijden, "Equilibrium theory of elastic braids", seed 000),
-#: read off the figures at Delta/L = 0.02 (left-handed, Lk = -n): slide 21 (4-link) and
+#: the extreme axis labels of the seed's plots (assumed to frame the curves) at Delta/L = 0.02 (left-handed, Lk = -n): slide 21 (4-link) and
 #: slide 23 (pentafoil; p on the ring [0, L + L2], kappa_c on [0, L]).
 SEED_VALUES = {
     ("link", 4): {"eta": (0.50910, 0.50935), "pressure": (3200.0, 3900.0),
