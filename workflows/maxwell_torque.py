@@ -59,7 +59,7 @@ def main(argv=None) -> int:
     plain = g - g[0]
     plain_se = np.sqrt(gs**2 + gs[0] ** 2)
     lines = [f"# Torque differences from the Maxwell relation vs the trap ({time.strftime('%Y-%m-%d %H:%M')})",
-             "", f"`python workflows/maxwell_torque.py`: default braid, forces {list(F)} pN, "
+             "", f"`python workflows/maxwell_torque.py`: default braid, forces {', '.join(f'{x:g}' for x in F)} pN, "
              f"{args.replicas} replicas x ({args.steps // 4} + {args.steps} steps) per point, "
              f"seed 3; wall {wall:.0f} s on 2 cores. Gamma(n, F) - Gamma(n, {F[0]:g} pN) in "
              "pN nm. All points NOT CONVERGED: an estimator comparison, not equilibrium "
