@@ -21,7 +21,6 @@ from .. import forcefield, reporters, rundir
 from ..chains import (
     MIN_PASSAGE_BARRIER_KT,
     ChainKit,
-    DNAParameters,
     Model,
     max_bead_spacing_nm,
     passage_barrier_kT,
@@ -30,7 +29,7 @@ from ..engine import INTEGRATORS, MAX_SEED, Engine, check_platform
 from ..forces.chiral import chiral_force
 from ..protocols import TurnSchedule
 from ..runner import run_schedule
-from .base import Scene, SceneError, key
+from .base import DNAQuantities, Scene, SceneError, key
 
 #: Largest number of DNA beads a tweezer scene may have (memory and time stay sane).
 MAX_BEADS = 20000
@@ -50,7 +49,7 @@ _MECH = forcefield.mechanics()
 
 
 @dataclasses.dataclass(frozen=True)
-class TweezerScene(Scene):
+class TweezerScene(DNAQuantities, Scene):
     """Keys every tweezer scene has (all lengths nm, forces pN, energies pN nm)."""
 
     force_pN: float = key(2.0, "pN", "constant force pulling the magnetic bead up (> 0)")
@@ -109,25 +108,6 @@ class TweezerScene(Scene):
     def n_beads(self) -> int:
         """Beads per strand (both ends included)."""
         return int(round(self.length_nm / self.bead_spacing_nm)) + 1
-
-    @property
-    def kT(self) -> float:
-        from ..units import kT
-
-        return kT(self.temperature_K)
-
-    @property
-    def effective_diameter_nm(self) -> float:
-        if self.diameter_nm > 0:
-            return float(self.diameter_nm)
-        return forcefield.salt_parameters(self.salt_mM).diameter_nm
-
-    def dna(self) -> DNAParameters:
-        return DNAParameters.make(temperature_K=self.temperature_K,
-                                  bead_spacing_nm=self.bead_spacing_nm,
-                                  persistence_nm=self.persistence_nm,
-                                  stretch_modulus_pN=self.stretch_modulus_pN,
-                                  salt_mM=self.salt_mM, diameter_nm=self.diameter_nm)
 
     # -- keys ----------------------------------------------------------------------------
     @classmethod

@@ -182,3 +182,36 @@ class Scene(abc.ABC):
     def default_short_run(self) -> dict:
         """Overrides that make a short run of this scene (extremes matrix, smoke tests)."""
         return {}
+
+
+class DNAQuantities:
+    """Derived quantities of a scene with DNA keys (``temperature_K``, ``salt_mM``,
+    ``diameter_nm``, ``bead_spacing_nm``, ``persistence_nm``, ``stretch_modulus_pN``): the
+    tweezer scenes and the catenane share them."""
+
+    @property
+    def kT(self) -> float:
+        """Thermal energy (pN nm)."""
+        from ..units import kT
+
+        return kT(self.temperature_K)
+
+    @property
+    def effective_diameter_nm(self) -> float:
+        """``diameter_nm`` if set, else Stigter's effective diameter at ``salt_mM``."""
+        from .. import forcefield
+
+        if self.diameter_nm > 0:
+            return float(self.diameter_nm)
+        return forcefield.salt_parameters(self.salt_mM).diameter_nm
+
+    def dna(self):
+        """The bead model's :class:`~dnabraid.chains.DNAParameters` for these keys."""
+        from ..chains import DNAParameters
+
+        return DNAParameters.make(temperature_K=self.temperature_K,
+                                  bead_spacing_nm=self.bead_spacing_nm,
+                                  persistence_nm=self.persistence_nm,
+                                  stretch_modulus_pN=self.stretch_modulus_pN,
+                                  salt_mM=self.salt_mM, diameter_nm=self.diameter_nm)
+

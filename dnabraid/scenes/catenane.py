@@ -60,7 +60,6 @@ from .. import forcefield, reporters, rundir
 from ..chains import (
     MIN_PASSAGE_BARRIER_KT,
     ChainKit,
-    DNAParameters,
     Model,
     max_bead_spacing_nm,
     passage_barrier_kT,
@@ -73,7 +72,7 @@ from ..geometry.twist import ring_twist
 from ..observables import Observable
 from ..protocols import TurnSchedule
 from ._tweezer import MAX_REPLICAS, _run_jobs, _usable_cores
-from .base import Scene, SceneError, key
+from .base import DNAQuantities, Scene, SceneError, key
 
 __all__ = ["Catenane", "RingObservables", "ChiralEnergy", "hopf_start"]
 
@@ -251,7 +250,7 @@ def _between(means) -> dict:
 
 
 @dataclasses.dataclass(frozen=True)
-class Catenane(Scene):
+class Catenane(DNAQuantities, Scene):
     """Two linked DNA minicircles (or one ring) at room temperature; keys in nm, pN, K."""
 
     name: ClassVar[str] = "catenane"
@@ -312,29 +311,10 @@ class Catenane(Scene):
         return int(round(self.length_nm / self.bead_spacing_nm))
 
     @property
-    def kT(self) -> float:
-        from ..units import kT
-
-        return kT(self.temperature_K)
-
-    @property
-    def effective_diameter_nm(self) -> float:
-        if self.diameter_nm > 0:
-            return float(self.diameter_nm)
-        return forcefield.salt_parameters(self.salt_mM).diameter_nm
-
-    @property
     def contact_distance_nm(self) -> float:
         if self.contact_nm > 0:
             return float(self.contact_nm)
         return self.effective_diameter_nm + 2.0 * forcefield.salt_parameters(self.salt_mM).debye_nm
-
-    def dna(self) -> DNAParameters:
-        return DNAParameters.make(temperature_K=self.temperature_K,
-                                  bead_spacing_nm=self.bead_spacing_nm,
-                                  persistence_nm=self.persistence_nm,
-                                  stretch_modulus_pN=self.stretch_modulus_pN,
-                                  salt_mM=self.salt_mM, diameter_nm=self.diameter_nm)
 
     def replica_seed(self, r: int) -> int:
         return self.seed * MAX_REPLICAS + r
