@@ -200,7 +200,9 @@ class ChainKit:
 
     def _add(self, chain, residue, atom, friction, position, element=None) -> int:
         res = self.topology.addResidue(residue, chain)
-        self.topology.addAtom(atom, element, res)
+        # coarse-grained particles carry a placeholder element (DNA beads carbon, the others
+        # iron): without one OpenMM writes "EP" and MDAnalysis warns on every load
+        self.topology.addAtom(atom, element or app.element.iron, res)
         mass = 0.0 if friction is None else units.friction_to_mass_amu(friction)
         i = self.system.addParticle(mass)
         if friction is None:
