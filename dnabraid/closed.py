@@ -68,11 +68,12 @@ import scipy.sparse.linalg as spla
 from scipy.optimize import brentq
 from scipy.spatial import cKDTree
 
+from .continuum.closed import LINK, TOPOLOGIES
 from .forces.contact import contact_exclusion_range
+from .knot import _pair_blocks  # U = k/2 (r - r0)^2 blocks, shared with the open knot
 
 log = logging.getLogger(__name__)
 
-TOPOLOGIES = ("link", "knot")
 CONTACT_MODELS = ("beads", "segments")
 
 
@@ -83,8 +84,11 @@ class ClosedError(RuntimeError):
 # -- the uniform closed ply (start and scales) -----------------------------------------------
 
 def ply_turns(topology: str, n: int) -> float:
-    """Turns of the strands about each other per strand length L: n (link), n/2 (knot)."""
-    return float(n) if topology == "link" else 0.5 * n
+    """Turns of the strands about each other per strand length L: n (link), n/2 (knot)
+    (:func:`dnabraid.continuum.closed.ply_turns`, which also checks n)."""
+    from .continuum.closed import ply_turns as _ply_turns
+
+    return _ply_turns(n, topology)
 
 
 def uniform_sin_theta(topology: str, n: int, diameter_over_length: float) -> float:
@@ -130,6 +134,11 @@ class ClosedBraid:
 
     # geometry
     @property
+    def is_link(self) -> bool:
+        """Two rings, the (2, 2n) torus link (else one ring, the (n, 2) torus knot)."""
+        return self.topology == LINK
+
+    @property
     def length_nm(self) -> float:
         """L, each strand's length."""
         return self.diameter_nm / self.diameter_over_length
@@ -145,7 +154,7 @@ class ClosedBraid:
     @property
     def ring_beads(self) -> tuple:
         M = self.beads_per_strand
-        return (M, M) if self.topology == "link" else (2 * M,)
+        return (M, M) if self.is_link else (2 * M,)
 
     @property
     def bead_spacing_nm(self) -> float:
@@ -199,7 +208,7 @@ def check(braid: ClosedBraid) -> None:
         raise ValueError(f"handedness={braid.handedness!r}: must be 'left' or 'right'")
     if not isinstance(braid.n, (int, np.integer)) or braid.n < 1:
         raise ValueError(f"n={braid.n!r}: must be an integer >= 1")
-    if braid.topology == "knot" and (braid.n % 2 == 0 or braid.n < 3):
+    if not braid.is_link and (braid.n % 2 == 0 or braid.n < 3):
         raise ValueError(f"n={braid.n}: a (n, 2) torus knot needs an odd n >= 3 (3 trefoil, "
                          "5 pentafoil, ...): an even n gives a two-component link, n = 1 the "
                          "unknot")
@@ -267,7 +276,7 @@ def initial_geometry(braid: ClosedBraid) -> list:
     """
     L, r, n = braid.length_nm, braid.radius_nm, braid.n
     chi = braid.chirality
-    if braid.topology == "link":
+    if braid.is_link:
         specs = [(n, 1, 0.0), (n, 1, math.pi)]
         target = L
     else:
@@ -414,17 +423,6 @@ def contact_energy(x, prob: Problem) -> float:
         return 0.0
     rr = np.linalg.norm(x[p[:, 1]] - x[p[:, 0]], axis=1)
     return 0.5 * br.contact_stiffness_pN_nm * float(np.sum((br.diameter_nm - rr) ** 2))
-
-
-def _pair_blocks(d, r, k: float, r0: float, gauss_newton: bool):
-    """Gradient wrt the pair vector d and its 3x3 Hessian for U = k/2 (r - r0)^2."""
-    u = d / r[:, None]
-    g = (k * (r - r0))[:, None] * u
-    uu = u[:, :, None] * u[:, None, :]
-    fac = k * (r - r0) / r
-    if gauss_newton:
-        fac = np.maximum(fac, 0.0)
-    return g, k * uu + fac[:, None, None] * (np.eye(3) - uu)
 
 
 class _Assembler:
@@ -863,7 +861,7 @@ def measure(x, braid: ClosedBraid, *, smooth_over_diameter: float = 1.0) -> dict
     fc = contact_forces(x, prob)
     pn = -np.sum(fc * dvec, axis=1) / ell          # normal push away from the partner, pN/nm
     p = pn / braid.pressure_unit
-    if braid.topology == "link":
+    if braid.is_link:
         sl = ch.ring(0)
     else:
         sl = slice(0, ch.n_beads)
@@ -904,15 +902,15 @@ def measure(x, braid: ClosedBraid, *, smooth_over_diameter: float = 1.0) -> dict
     # slide 21: p of period n, eta of period 2n along a link's ring; slide 23: p of period n
     # on a knot's whole ring (its contact, covered twice by the ring, has eta of period n)
     npk = braid.n
-    nek = 2 * braid.n if braid.topology == "link" else braid.n
+    nek = 2 * braid.n if braid.is_link else braid.n
     out["pressure_symmetry"] = symmetry(ps, npk)
     out["eta_symmetry"] = symmetry(es, nek)
-    out["eta_symmetry_half"] = symmetry(es, npk) if braid.topology == "link" else None
+    out["eta_symmetry_half"] = symmetry(es, npk) if braid.is_link else None
     from .geometry.curves import gauss_linking_number, writhe
 
     rings = [x[ch.ring(k)] for k in range(len(ch.sizes))]
     out["writhe_per_ring"] = [float(writhe(r)) for r in rings]
-    if braid.topology == "link":
+    if braid.is_link:
         out["linking_number"] = float(gauss_linking_number(rings[0], rings[1]))
     else:
         out["linking_number"] = None

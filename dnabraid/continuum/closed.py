@@ -195,6 +195,7 @@ __all__ = [
 ]
 
 TOPOLOGIES = ("link", "knot")
+LINK, KNOT = TOPOLOGIES
 
 #: Seed numbers (van der Heijden, slides 21 and 23), read off the plots' axes.
 SEED = {
@@ -217,13 +218,13 @@ def _check(n, diameter_over_length, topology) -> tuple[int, float, str, float]:
     if topology not in TOPOLOGIES:
         raise InputError(f"topology must be one of {TOPOLOGIES}, got {topology!r}")
     n = check_n(n, minimum=1, name="n",
-                what="the link's |Lk|" if topology == "link" else "the knot's odd n")
+                what="the link's |Lk|" if topology == LINK else "the knot's odd n")
     d = check_positive("diameter_over_length", diameter_over_length)
-    if topology == "knot" and n % 2 == 0:
+    if topology == KNOT and n % 2 == 0:
         raise InputError(f"n must be odd for the (n, 2) torus knot, got n={n}: an even n "
                          f"closes the two strands into two rings, the (2, {n}) torus link "
                          f"(use topology='link' with n={n // 2})")
-    m = float(n) if topology == "link" else 0.5 * n
+    m = float(n) if topology == LINK else 0.5 * n
     s = math.pi * m * d
     if s >= 1.0:
         raise InputError(f"n={n} does not fit: sin(theta) = pi m Delta/L = pi*{m:g}*{d:g} = "
@@ -247,9 +248,9 @@ def ply_turns(n, topology: str = "link") -> float:
     if topology not in TOPOLOGIES:
         raise InputError(f"topology must be one of {TOPOLOGIES}, got {topology!r}")
     n = check_n(n, minimum=1, name="n")
-    if topology == "knot" and n % 2 == 0:
+    if topology == KNOT and n % 2 == 0:
         raise InputError(f"n must be odd for the (n, 2) torus knot, got n={n}")
-    return float(n) if topology == "link" else 0.5 * n
+    return float(n) if topology == LINK else 0.5 * n
 
 
 # --------------------------------------------------------------------------- leading order
@@ -318,7 +319,7 @@ def torus_ply_curves(n, diameter_over_length: float, topology: str = "link",
     length = check_positive("length", length)
     r = 0.5 * d
     R = _axis_radius(r, m)
-    if topology == "link":
+    if topology == LINK:
         u = 2.0 * math.pi * np.arange(n_points) / n_points
         phases = (0.0, math.pi)
     else:
@@ -454,7 +455,7 @@ def writhe_formula(n, diameter_over_length: float, topology: str = "link") -> fl
     s = math.pi * m * d
     c = math.sqrt(1.0 - s * s)
     eps = math.pi * d / c
-    if topology == "link":
+    if topology == LINK:
         return -(m * (1.0 - c) - 0.5 * eps * s * c * c)
     return -(n * (2.0 - c) - eps * s * c * c)
 
@@ -476,7 +477,7 @@ def writhe_fuller(n, diameter_over_length: float, topology: str = "link",
     r = 0.5 * d
     R = _axis_radius(r, m)
     eps, k = r / R, r * m / R
-    circuits = 1 if topology == "link" else 2
+    circuits = 1 if topology == LINK else 2
     u = 2.0 * math.pi * circuits * np.arange(circuits * n_points) / (circuits * n_points)
     phi = m * u
     a = 1.0 + eps * np.cos(phi)
@@ -487,7 +488,7 @@ def writhe_fuller(n, diameter_over_length: float, topology: str = "link",
     dlam = 1.0 + k * m * (a * np.cos(phi) + eps * np.sin(phi) ** 2) / (
         a * a + (k * np.sin(phi)) ** 2)
     area_term = float(np.mean(tz * dlam)) * circuits  # (1/2pi) oint t_z dlambda
-    w0 = 0.0 if topology == "link" else -float(n)
+    w0 = 0.0 if topology == LINK else -float(n)
     return w0 - area_term
 
 
@@ -524,7 +525,7 @@ def torus_helix_local_balance(n, diameter_over_length: float, topology: str = "l
     n, d, topology, m = _check(n, diameter_over_length, topology)
     n_points = check_n(n_points, minimum=64, name="n_points")
     rings = torus_ply_curves(n, d, topology, n_points=n_points)
-    period = 2.0 * math.pi * (1 if topology == "link" else 2)
+    period = 2.0 * math.pi * (1 if topology == LINK else 2)
 
     def frames(x):
         xu = _spectral_derivative(x, period)
@@ -535,7 +536,7 @@ def torus_helix_local_balance(n, diameter_over_length: float, topology: str = "l
             der.append(_spectral_derivative(der[-1], period) / speed[:, None])
         return x, der, speed
 
-    if topology == "link":
+    if topology == LINK:
         (xa, da, sa), (xb, db, sb) = frames(rings[0]), frames(rings[1])
     else:
         x, der, sp = frames(rings[0])
@@ -580,7 +581,7 @@ class _RitzPly:
     def __init__(self, n, d, topology, harmonics, n_points):
         self.m = ply_turns(n, topology)
         self.r = 0.5 * d
-        self.circuits = 1 if topology == "link" else 2
+        self.circuits = 1 if topology == LINK else 2
         self.topology = topology
         self.period = 2.0 * math.pi * self.circuits
         self.u = self.period * np.arange(n_points * self.circuits) / (n_points * self.circuits)
@@ -628,7 +629,7 @@ class _RitzPly:
             return 1e3 * self.e_torus  # outside the admissible shapes: a wall for L-BFGS-B
         x1, x2, _ = self.curves(R, c)
         total = 0.0
-        for x in ((x1, x2) if self.topology == "link" else (x1,)):
+        for x in ((x1, x2) if self.topology == LINK else (x1,)):
             xp = _spectral_derivative(x, self.period)
             xpp = _spectral_derivative(xp, self.period)
             speed = np.linalg.norm(xp, axis=1)
@@ -724,7 +725,7 @@ def relax_closed_ply(n, diameter_over_length: float, topology: str = "link", *,
                                time.perf_counter() - t0)
     x1, x2, X = model.curves(R, coef)
     P = model.period
-    if topology == "link":
+    if topology == LINK:
         (da, sa), (db, sb) = _strand_frames(x1, P), _strand_frames(x2, P)
         xa, xb = x1, x2
     else:  # x1 covers the whole ring; strand 2 is its second circuit
@@ -756,7 +757,7 @@ def relax_closed_ply(n, diameter_over_length: float, topology: str = "link", *,
     Xpp = _spectral_derivative(Xp, P)
     kc = np.linalg.norm(np.cross(Xp, Xpp), axis=1) / np.linalg.norm(Xp, axis=1) ** 3
     du = P / len(x1)
-    if topology == "link":
+    if topology == LINK:
         p_ring, s_ring, eta_ring = pa, np.concatenate([[0.0], np.cumsum(sa[:-1])]) * du, eta
         w = sa
     else:  # along the whole ring: strand 1 then strand 2 (eta is a pair quantity)
@@ -858,7 +859,7 @@ def closed_ply(n, diameter_over_length: float, topology: str = "link", *, relax:
         "n": n,
         "diameter_over_length": d,
         "ply_turns": m,
-        "linking_number": -float(n) if topology == "link" else -0.5 * n,
+        "linking_number": -float(n) if topology == LINK else -0.5 * n,
         "theta_rad": theta,
         "theta_deg": math.degrees(theta),
         "eta_rad": 2.0 * theta,

@@ -29,7 +29,7 @@ from ..engine import INTEGRATORS, MAX_SEED, Engine, check_platform
 from ..forces.chiral import chiral_force
 from ..protocols import TurnSchedule
 from ..runner import run_schedule
-from .base import DNAQuantities, Scene, SceneError, key
+from .base import DNAQuantities, Scene, SceneError, key, resolve_salt_alpha
 
 #: Largest number of DNA beads a tweezer scene may have (memory and time stay sane).
 MAX_BEADS = 20000
@@ -112,15 +112,7 @@ class TweezerScene(DNAQuantities, Scene):
     # -- keys ----------------------------------------------------------------------------
     @classmethod
     def resolve(cls, values: dict) -> dict:
-        if isinstance(values.get("alpha"), str):
-            if values["alpha"].strip().lower() != "salt":
-                raise SceneError(f"alpha (in pN): expected a number or 'salt', got "
-                                 f"{values['alpha']!r}")
-            salt = values.get("salt_mM", cls.salt_mM)
-            if isinstance(salt, bool) or not isinstance(salt, (int, float)) or not salt > 0:
-                raise SceneError(f"salt_mM={salt!r} mM: salt must be > 0 mM")
-            values["alpha"] = forcefield.chiral_parameters(float(salt))["alpha_pN"]
-        return values
+        return resolve_salt_alpha(values, cls.salt_mM)
 
     #: True when the strands must not pass through each other whatever their length.
     needs_passage_barrier: ClassVar[bool] = False

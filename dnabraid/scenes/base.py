@@ -215,3 +215,18 @@ class DNAQuantities:
                                   stretch_modulus_pN=self.stretch_modulus_pN,
                                   salt_mM=self.salt_mM, diameter_nm=self.diameter_nm)
 
+
+def resolve_salt_alpha(values: dict, default_salt_mM: float) -> dict:
+    """``alpha = 'salt'``: the chiral strength estimated at the scene's salt
+    (``forcefields/chiral.toml``); any other text is refused."""
+    if isinstance(values.get("alpha"), str):
+        from .. import forcefield
+
+        if values["alpha"].strip().lower() != "salt":
+            raise SceneError(f"alpha (in pN): expected a number or 'salt', got "
+                             f"{values['alpha']!r}")
+        salt = values.get("salt_mM", default_salt_mM)
+        if isinstance(salt, bool) or not isinstance(salt, (int, float)) or not salt > 0:
+            raise SceneError(f"salt_mM={salt!r} mM: salt must be > 0 mM")
+        values["alpha"] = forcefield.chiral_parameters(float(salt))["alpha_pN"]
+    return values

@@ -72,7 +72,7 @@ from ..geometry.twist import ring_twist
 from ..observables import Observable
 from ..protocols import TurnSchedule
 from ._tweezer import MAX_REPLICAS, _run_jobs, _usable_cores
-from .base import DNAQuantities, Scene, SceneError, key
+from .base import DNAQuantities, Scene, SceneError, key, resolve_salt_alpha
 
 __all__ = ["Catenane", "RingObservables", "ChiralEnergy", "hopf_start"]
 
@@ -322,15 +322,7 @@ class Catenane(DNAQuantities, Scene):
     # -- keys ----------------------------------------------------------------------------
     @classmethod
     def resolve(cls, values: dict) -> dict:
-        if isinstance(values.get("alpha"), str):
-            if values["alpha"].strip().lower() != "salt":
-                raise SceneError(f"alpha (in pN): expected a number or 'salt', got "
-                                 f"{values['alpha']!r}")
-            salt = values.get("salt_mM", cls.salt_mM)
-            if isinstance(salt, bool) or not isinstance(salt, (int, float)) or not salt > 0:
-                raise SceneError(f"salt_mM={salt!r} mM: salt must be > 0 mM")
-            values["alpha"] = forcefield.chiral_parameters(float(salt))["alpha_pN"]
-        return values
+        return resolve_salt_alpha(values, cls.salt_mM)
 
     def validate(self) -> None:
         need = self.need
