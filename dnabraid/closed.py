@@ -70,7 +70,7 @@ from scipy.spatial import cKDTree
 
 from .continuum.closed import LINK, TOPOLOGIES
 from .forces.contact import contact_exclusion_range
-from .knot import _pair_blocks  # U = k/2 (r - r0)^2 blocks, shared with the open knot
+from .knot import _pair_blocks, hinge_blocks  # shared with the open knot
 
 log = logging.getLogger(__name__)
 
@@ -459,24 +459,7 @@ def _hinge_terms(asm: _Assembler, x, hinges, kappa: float) -> None:
     """U = kappa (1 - c) for each hinge (i0, i1, i2), c = u.v/(|u||v|): gradient and exact Hessian."""
     i0, i1, i2 = hinges[:, 0], hinges[:, 1], hinges[:, 2]
     u, v = x[i1] - x[i0], x[i2] - x[i1]
-    a, bv = np.linalg.norm(u, axis=1), np.linalg.norm(v, axis=1)
-    uh, vh = u / a[:, None], v / bv[:, None]
-    c = np.sum(uh * vh, axis=1)
-    gu = (vh - c[:, None] * uh) / a[:, None]
-    gv = (uh - c[:, None] * vh) / bv[:, None]
-    I3 = np.eye(3)
-
-    def outer(p_, q_):
-        return p_[:, :, None] * q_[:, None, :]
-
-    Huu = -(outer(uh, gu) + outer(gu, uh)) / a[:, None, None] - \
-        (c / a**2)[:, None, None] * (I3 - outer(uh, uh))
-    Hvv = -(outer(vh, gv) + outer(gv, vh)) / bv[:, None, None] - \
-        (c / bv**2)[:, None, None] * (I3 - outer(vh, vh))
-    Huv = (I3 - outer(uh, uh) - outer(vh, vh) + c[:, None, None] * outer(uh, vh)) / \
-        (a * bv)[:, None, None]
-    Gu, Gv = -kappa * gu, -kappa * gv
-    Huu, Hvv, Huv = -kappa * Huu, -kappa * Hvv, -kappa * Huv
+    Gu, Gv, Huu, Hvv, Huv = hinge_blocks(u, v, kappa)
     np.add.at(asm.g, i0, -Gu)
     np.add.at(asm.g, i1, Gu - Gv)
     np.add.at(asm.g, i2, Gv)

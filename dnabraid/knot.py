@@ -242,6 +242,29 @@ def _pair_blocks(d, r, k: float, r0: float, gauss_newton: bool):
     return g, k * uu + fac[:, None, None] * (np.eye(3) - uu)
 
 
+def hinge_blocks(u, v, kappa: float):
+    """U = kappa (1 - c), c = u.v / (|u||v|), for bond vectors u, v (m, 3): the gradient
+    with respect to u and v and the exact 3x3 Hessian blocks (uu, vv, uv)."""
+    a, bv = np.linalg.norm(u, axis=1), np.linalg.norm(v, axis=1)
+    uh, vh = u / a[:, None], v / bv[:, None]
+    c = np.sum(uh * vh, axis=1)
+    gu = (vh - c[:, None] * uh) / a[:, None]
+    gv = (uh - c[:, None] * vh) / bv[:, None]
+    I3 = np.eye(3)
+
+    def outer(p_, q_):
+        return p_[:, :, None] * q_[:, None, :]
+
+    Huu = -(outer(uh, gu) + outer(gu, uh)) / a[:, None, None] - \
+        (c / a**2)[:, None, None] * (I3 - outer(uh, uh))
+    Hvv = -(outer(vh, gv) + outer(gv, vh)) / bv[:, None, None] - \
+        (c / bv**2)[:, None, None] * (I3 - outer(vh, vh))
+    Huv = (I3 - outer(uh, uh) - outer(vh, vh) + c[:, None, None] * outer(uh, vh)) / \
+        (a * bv)[:, None, None]
+    # U = -kappa c (+ const): dU/du = -kappa gu ...
+    return -kappa * gu, -kappa * gv, -kappa * Huu, -kappa * Hvv, -kappa * Huv
+
+
 def gradient_hessian(x, prob: _Problem, *, gauss_newton: bool = True):
     """Gradient (3N,) and sparse Hessian (3N x 3N, CSR) of :func:`energy`.
 
@@ -282,22 +305,7 @@ def gradient_hessian(x, prob: _Problem, *, gauss_newton: bool = True):
     # hinges: U = kappa (1 - c), c = u.v / (|u||v|), u = x1 - x0, v = x2 - x1
     kappa = rod.bending_stiffness_pN_nm2 / b
     u, v = d[:-1], d[1:]
-    a, bv = r[:-1], r[1:]
-    uh, vh = u / a[:, None], v / bv[:, None]
-    c = np.sum(uh * vh, axis=1)
-    gu = (vh - c[:, None] * uh) / a[:, None]
-    gv = (uh - c[:, None] * vh) / bv[:, None]
-    I3 = np.eye(3)
-    outer = lambda p_, q_: p_[:, :, None] * q_[:, None, :]  # noqa: E731
-    Huu = -(outer(uh, gu) + outer(gu, uh)) / a[:, None, None] - \
-        (c / a**2)[:, None, None] * (I3 - outer(uh, uh))
-    Hvv = -(outer(vh, gv) + outer(gv, vh)) / bv[:, None, None] - \
-        (c / bv**2)[:, None, None] * (I3 - outer(vh, vh))
-    Huv = (I3 - outer(uh, uh) - outer(vh, vh) + c[:, None, None] * outer(uh, vh)) / \
-        (a * bv)[:, None, None]
-    # U = -kappa c (+ const): dU/du = -kappa gu ...
-    Gu, Gv = -kappa * gu, -kappa * gv
-    Huu, Hvv, Huv = -kappa * Huu, -kappa * Hvv, -kappa * Huv
+    Gu, Gv, Huu, Hvv, Huv = hinge_blocks(u, v, kappa)
     j0 = np.arange(N - 2)
     np.add.at(g, j0, -Gu)
     np.add.at(g, j0 + 1, Gu - Gv)
