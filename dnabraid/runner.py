@@ -7,10 +7,15 @@ stream (:meth:`Engine.restart`, a hash of the seed and the segment's index) and 
 from the saved initial state. Either way an interrupted run that is started again repeats
 exactly what the uninterrupted one did and ends with the same numbers (same platform).
 Finished segments are skipped.
+
+:func:`run_packed` does the same for R replicas packed into one Context
+(:mod:`dnabraid.packing`): one engine steps all of them, and every replica keeps its own
+start, observables, invariant checks and point directories, exactly as if it ran alone.
 """
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import json
 import logging
@@ -28,11 +33,28 @@ log = logging.getLogger(__name__)
 
 TWO_PI = 6.283185307179586
 
-__all__ = ["run_schedule", "point_dir"]
+__all__ = ["run_schedule", "run_packed", "point_dir", "Member"]
 
 
 def point_dir(out: str, seg: Segment) -> str:
     return os.path.join(out, "points", seg.tag)
+
+
+@dataclasses.dataclass
+class Member:
+    """One replica of a run: its model, observables, run directory and context.
+
+    ``ctx`` as for :func:`run_schedule`; ``sl`` and ``offset`` place the replica's particles
+    in the engine's positions (the whole array and no offset when it runs alone).
+    """
+
+    model: object
+    observables: list
+    out: str
+    ctx: dict
+    sl: slice = dataclasses.field(default_factory=lambda: slice(None))
+    offset: np.ndarray | float = 0.0
+    label: str = ""
 
 
 def _observe(observables, pos, ctx, every_frame: bool) -> tuple[dict, str | None]:
@@ -68,30 +90,55 @@ def run_schedule(model, engine: Engine, schedule, observables, out: str, *, ctx:
     progress : callable(int), optional
         Called with the number of steps just taken.
     """
+    member = Member(model, observables, out, ctx)
+    return _run_members(engine, schedule, [member], os.path.join(out, "checkpoints"),
+                        lambda seg: os.path.join(point_dir(out, seg), "state.chk"),
+                        progress=progress)[0]
+
+
+def run_packed(pack, engine: Engine, schedule, members: list, out: str, *,
+               progress=None) -> list[list[str]]:
+    """Run every segment for the packed replicas ``members`` (one :class:`Member` per copy
+    of ``pack``, a :class:`dnabraid.packing.Pack`); the engine runs ``pack.model``.
+
+    Checkpoints of the packed Context go to ``out/checkpoints``; each replica writes its
+    points under its own ``member.out``. Returns each replica's point directories.
+    """
+    for r, m in enumerate(members):
+        m.sl, m.offset = pack.slice(r), pack.offsets[r]
+    return _run_members(engine, schedule, members, os.path.join(out, "checkpoints"),
+                        lambda seg: os.path.join(out, "checkpoints", f"{seg.tag}.chk"),
+                        progress=progress, check=pack.check_apart)
+
+
+def _run_members(engine, schedule, members, ckdir, chk_path, *, progress=None,
+                 check=None) -> list[list[str]]:
     progress = progress or (lambda n: None)
-    s = model.scene
+    m0 = members[0]
+    s = m0.model.scene
     ri = s.report_interval
     every = max(1, s.frame_interval // ri)
-    ckdir = os.path.join(out, "checkpoints")
     os.makedirs(ckdir, exist_ok=True)
     init = os.path.join(ckdir, "initial.xml")
     if not os.path.exists(init):
-        if ctx.get("minimise", True):
+        if m0.ctx.get("minimise", True):
             engine.minimise()
         engine.save_state(init)
-    sample_cols = {k: v for ob in observables if ob.every == "sample"
-                   for k, v in ob.columns.items()}
-    frame_cols = {k: v for ob in observables if ob.every == "frame"
-                  for k, v in ob.columns.items()}
-    trap = ctx.get("trap_parameter")
-    dirs = []
+    obs0 = m0.observables
+    sample_cols = {k: v for ob in obs0 if ob.every == "sample" for k, v in ob.columns.items()}
+    frame_cols = {k: v for ob in obs0 if ob.every == "frame" for k, v in ob.columns.items()}
+    trap = m0.ctx.get("trap_parameter")
+    axis = getattr(s, "mirror_axis", None)
+    if axis is not None and len(members) > 1:
+        raise ValueError("mirror-coupled replicas cannot be packed")
+    dirs: list[list[str]] = [[] for _ in members]
     for seg in schedule:
-        pdir = point_dir(out, seg)
-        dirs.append(pdir)
-        done = os.path.join(pdir, "done.json")
-        if os.path.exists(done):
-            progress(seg.steps)
-            log.info("turns=%g loaded from %s", seg.turns, pdir)
+        pdirs = [point_dir(m.out, seg) for m in members]
+        for d, p in zip(dirs, pdirs):
+            d.append(p)
+        if all(os.path.exists(os.path.join(p, "done.json")) for p in pdirs):
+            progress(seg.steps * len(members))
+            log.info("turns=%g loaded from %s", seg.turns, pdirs[0])
             continue
         if seg.start_from is None:
             # an independent start: its own random stream, from the initial state or from a
@@ -101,86 +148,119 @@ def run_schedule(model, engine: Engine, schedule, observables, out: str, *, ctx:
             if seg.start_turns != 0.0 or getattr(s, "builds_zero_start", False):
                 start = os.path.join(ckdir, f"initial_{seg.tag}.xml")
                 if not os.path.exists(start):
-                    try:
-                        built = ctx["start_positions"](seg.start_turns)
-                    except ValueError as exc:  # the scene cannot build it: ramp from 0
-                        log.info("turns=%g: %s; ramping from 0 instead", seg.turns, exc)
-                        built = None
-                    engine.load_state(init)
-                    axis = getattr(s, "mirror_axis", None)
-                    if built is not None and axis is None:
-                        engine.set_positions(built)
-                        engine.set_parameter(trap, TWO_PI * seg.start_turns)
-                        engine.minimise()
-                    elif built is not None:
-                        # the image of a mirror-coupled pair: minimise in the original's
-                        # frame (the minimiser is not mirror-symmetric to round-off), then
-                        # mirror, so that without a chiral term the image starts exactly
-                        # where the original's mirror does
-                        engine.set_positions(_mirrored(built, axis))
-                        engine.set_parameter(trap, -TWO_PI * seg.start_turns)
-                        engine.minimise()
-                        engine.set_positions(_mirrored(engine.positions(), axis))
-                        engine.set_parameter(trap, TWO_PI * seg.start_turns)
+                    _build_start(engine, members, seg, init, trap, axis)
                     engine.save_state(start)
             engine.load_state(start)
             if seg.start_turns != 0.0 and trap is not None and abs(
                     engine.context.getParameter(trap) - TWO_PI * seg.start_turns) > 1e-9:
                 # the start could not be built at the turn value: ramp there from 0
-                rate = ctx["turn_rate"]
+                rate = m0.ctx["turn_rate"]
                 ramp = int(math.ceil(abs(seg.turns) / rate / ri)) * ri
                 seg = dataclasses.replace(seg, start_turns=0.0, ramp_steps=ramp)
         else:
-            engine.load_checkpoint(os.path.join(
-                point_dir(out, schedule.segments[seg.start_from]), "state.chk"))
-        if os.path.isdir(pdir):
-            shutil.rmtree(pdir)  # an interrupted point: run it again from its start
-        ctx = dict(ctx, trap_turns=seg.start_turns)
-        pos = engine.positions()
-        for ob in observables:
-            ob.reset(seg.start_turns, pos)
-        fail_dir = out
-        with reporters.PointWriter(pdir, model.topology, engine.dt_ns * 1e3, s.frame_interval,
-                                   sample_cols, frame_cols, seg.turns) as w:
+            engine.load_checkpoint(chk_path(schedule.segments[seg.start_from]))
+        for p in pdirs:
+            if os.path.isdir(p):
+                shutil.rmtree(p)  # an interrupted point: run it again from its start
+        ctxs = [dict(m.ctx, trap_turns=seg.start_turns) for m in members]
+        split = _splitter(members)
+        for m, p in zip(members, split(engine.positions())):
+            for ob in m.observables:
+                ob.reset(seg.start_turns, p)
+        fail_dir = m0.out if len(members) == 1 else os.path.dirname(ckdir)
+
+        def observe(pos, every_frame, writers=None):
+            parts = split(pos)
+            if check is not None:
+                check(parts)
+            for m, c, p, w in zip(members, ctxs, parts, writers or [None] * len(members)):
+                values, msg = _observe(m.observables, p, c, every_frame)
+                if msg:
+                    engine.blow_up(msg if len(members) == 1 else f"{m.label}: {msg}")
+                if w is not None:
+                    w.sample(engine.step, values)
+                    if every_frame:
+                        w.frame(engine.step, p.astype("float32"), values)
+
+        with contextlib.ExitStack() as stack:
+            ws = [stack.enter_context(reporters.PointWriter(
+                p, m.model.topology, engine.dt_ns * 1e3, s.frame_interval, sample_cols,
+                frame_cols, seg.turns)) for m, p in zip(members, pdirs)]
             # 1. ramp the trap angle
             nramp = seg.ramp_steps // ri
             for i in range(1, nramp + 1):
                 tt = seg.start_turns + (seg.turns - seg.start_turns) * i / nramp
                 engine.set_parameter(trap, TWO_PI * tt)
                 pos = engine.advance(ri, fail_dir)
-                ctx["trap_turns"] = tt
-                _, msg = _observe(observables, pos, ctx, False)
-                if msg:
-                    engine.blow_up(msg)
-                progress(ri)
+                for c in ctxs:
+                    c["trap_turns"] = tt
+                observe(pos, False)
+                progress(ri * len(members))
             if trap is not None:
                 engine.set_parameter(trap, TWO_PI * seg.turns)
-            ctx["trap_turns"] = seg.turns
+            for c in ctxs:
+                c["trap_turns"] = seg.turns
             # 2. equilibrate
             left = seg.equilibration_steps
             while left > 0:
                 n = min(left, ri)
                 pos = engine.advance(n, fail_dir)
-                _, msg = _observe(observables, pos, ctx, False)
-                if msg:
-                    engine.blow_up(msg)
-                progress(n)
+                observe(pos, False)
+                progress(n * len(members))
                 left -= n
             # 3. sample
             for i in range(seg.sample_steps // ri):
                 pos = engine.advance(ri, fail_dir)
-                progress(ri)
-                is_frame = (i + 1) % every == 0
-                values, msg = _observe(observables, pos, ctx, is_frame)
-                if msg:
-                    engine.blow_up(msg)
-                w.sample(engine.step, values)
-                if is_frame:
-                    w.frame(engine.step, pos.astype("float32"), values)
-        engine.save_checkpoint(os.path.join(pdir, "state.chk"))
-        rundir.atomic_write_text(done, json.dumps({"turns": seg.turns, "step": engine.step,
-                                                   "frames": w.n_frames}) + "\n")
+                progress(ri * len(members))
+                observe(pos, (i + 1) % every == 0, ws)
+        engine.save_checkpoint(chk_path(seg))
+        for p, w in zip(pdirs, ws):
+            rundir.atomic_write_text(os.path.join(p, "done.json"), json.dumps(
+                {"turns": seg.turns, "step": engine.step, "frames": w.n_frames}) + "\n")
     return dirs
+
+
+def _splitter(members):
+    """Positions of the engine -> each member's positions in its own frame."""
+    if len(members) == 1 and members[0].sl == slice(None):
+        return lambda pos: [pos]
+    return lambda pos: [pos[m.sl] - m.offset for m in members]
+
+
+def _build_start(engine, members, seg, init, trap, axis) -> None:
+    """Set the engine to the members' built starts at ``seg.start_turns``, minimised.
+
+    When a member's scene cannot build it, every member keeps the initial state (the caller
+    then ramps there from 0: one trap angle drives them all).
+    """
+    built = []
+    for m in members:
+        try:
+            built.append(m.ctx["start_positions"](seg.start_turns))
+        except ValueError as exc:  # the scene cannot build it: ramp from 0
+            log.info("turns=%g: %s; ramping from 0 instead", seg.turns, exc)
+            built = None
+            break
+    engine.load_state(init)
+    if built is None:
+        return
+    if axis is None:
+        pos = engine.positions()
+        for m, b in zip(members, built):
+            pos[m.sl] = np.asarray(b, float) + m.offset
+        engine.set_positions(pos)
+        engine.set_parameter(trap, TWO_PI * seg.start_turns)
+        engine.minimise()
+    else:
+        # the image of a mirror-coupled pair (always alone in its Context): minimise in the
+        # original's frame (the minimiser is not mirror-symmetric to round-off), then
+        # mirror, so that without a chiral term the image starts exactly where the
+        # original's mirror does
+        engine.set_positions(_mirrored(built[0], axis))
+        engine.set_parameter(trap, -TWO_PI * seg.start_turns)
+        engine.minimise()
+        engine.set_positions(_mirrored(engine.positions(), axis))
+        engine.set_parameter(trap, TWO_PI * seg.start_turns)
 
 
 def _mirrored(pos, axis: int):

@@ -1,10 +1,11 @@
 """Replicas in one OpenMM Context against one Context per replica (issue 13, item 3).
 
-R non-interacting copies of a scene's System are packed into one System: particles,
-bonded terms and external terms copied with an index offset; the copies' excluded volume
-is kept apart by placing them ``spacing_nm`` apart along x (beyond the cutoff, so that the
-neighbour list never pairs two copies: checked below), centred on the origin (the CPU
-platform's nonbonded kernels are single precision). Global parameters (trap angle, force)
+R non-interacting copies of a scene's System are packed into one System
+(:func:`dnabraid.packing.replicate_system`, which `dnabraid run` uses since 2026-12-01, key
+``pack``): particles, bonded terms and external terms copied with an index offset; the
+copies' excluded volume is kept apart by placing them ``spacing_nm`` apart along x (beyond
+the cutoff, so that the neighbour list never pairs two copies: checked below), centred on
+the origin (the CPU platform's nonbonded kernels are single precision). Global parameters (trap angle, force)
 are shared, as they are for replicas of one point. Measured: steps/s of the packed Context
 and replica-steps/s (= R x steps/s) against R separate single-replica runs, one pinned core
 each, which is what `dnabraid run` does today (workers = cores).
@@ -25,63 +26,10 @@ import openmm
 from openmm import unit as u
 
 from dnabraid.engine import GAMMA_PER_PS
+from dnabraid.packing import replicate_system
 from dnabraid.scenes import make_scene, parse_value
 
 HERE = pathlib.Path(__file__).resolve().parent
-
-
-def replicate_system(system: openmm.System, R: int) -> openmm.System:
-    """R non-interacting copies of ``system`` (the force classes dnabraid scenes use)."""
-    N = system.getNumParticles()
-    out = openmm.System()
-    for r in range(R):
-        for i in range(N):
-            out.addParticle(system.getParticleMass(i))
-        for k in range(system.getNumConstraints()):
-            i, j, d = system.getConstraintParameters(k)
-            out.addConstraint(i + r * N, j + r * N, d)
-    for f in system.getForces():
-        g = openmm.XmlSerializer.clone(f) if hasattr(openmm.XmlSerializer, "clone") else \
-            openmm.XmlSerializer.deserialize(openmm.XmlSerializer.serialize(f))
-        name = type(f).__name__
-        if name == "HarmonicBondForce":
-            for r in range(1, R):
-                for k in range(f.getNumBonds()):
-                    i, j, d, kk = f.getBondParameters(k)
-                    g.addBond(i + r * N, j + r * N, d, kk)
-        elif name == "CustomBondForce":
-            for r in range(1, R):
-                for k in range(f.getNumBonds()):
-                    i, j, p = f.getBondParameters(k)
-                    g.addBond(i + r * N, j + r * N, p)
-        elif name == "CustomAngleForce":
-            for r in range(1, R):
-                for k in range(f.getNumAngles()):
-                    i, j, m, p = f.getAngleParameters(k)
-                    g.addAngle(i + r * N, j + r * N, m + r * N, p)
-        elif name == "CustomExternalForce":
-            for r in range(1, R):
-                for k in range(f.getNumParticles()):
-                    i, p = f.getParticleParameters(k)
-                    g.addParticle(i + r * N, p)
-        elif name == "CustomCompoundBondForce":
-            for r in range(1, R):
-                for k in range(f.getNumBonds()):
-                    idx, p = f.getBondParameters(k)
-                    g.addBond([i + r * N for i in idx], p)
-        elif name == "CustomNonbondedForce":
-            if f.getNumInteractionGroups():
-                raise NotImplementedError("interaction groups")
-            for r in range(1, R):
-                for k in range(N):
-                    g.addParticle(f.getParticleParameters(k))
-                for k in range(f.getNumExclusions()):
-                    i, j = f.getExclusionParticles(k)
-                    g.addExclusion(i + r * N, j + r * N)
-        else:
-            raise NotImplementedError(f"cannot replicate a {name} ({f.getName()})")
-        out.addForce(g)
-    return out
 
 
 def _context(system, positions, dt_ps, temperature_K, threads=1):

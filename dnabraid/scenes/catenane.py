@@ -513,11 +513,11 @@ class Catenane(DNAQuantities, Scene):
         workers = self.workers or _usable_cores()
         R = self.replicas
         nw = max(1, min(workers, R)) if platform == "CPU" else 1
-        jobs = [(self.to_dict(), r, os.path.join(out, "replicas", f"r{r:02d}"), platform,
-                 threads if nw == 1 else 1) for r in range(R)]
+        jobs = [(self.to_dict(), (r,), out, platform, threads if nw == 1 else 1)
+                for r in range(R)]
         bar = progress_factory(sched.total_steps * R) if progress_factory else None
         try:
-            results = _run_jobs(jobs, nw, bar)
+            results = [x for res in _run_jobs(jobs, nw, bar) for x in res]
         finally:
             if bar:
                 bar.close()

@@ -1,0 +1,220 @@
+"""Packed replicas: R non-interacting copies of one scene in one OpenMM System and Context.
+
+OpenMM's CPU platform pays a fixed cost per step and force (~0.1 ms for the default braid's
+83 particles, most of its step), so R small replicas in one Context cost far less than R
+Contexts (measured 2.0x at R = 2, 2.3x at R = 4 replica-steps per second on one core;
+``workflows/benchmark_replicas.py``). Each replica keeps its own start (built from its own
+seed), observables, writers and blow-up checks (:func:`dnabraid.runner.run_packed`); only the
+integrator's random stream is shared, and it draws independent numbers for every particle,
+so the copies stay statistically independent.
+
+Layout: copy r sits at the x-y offset of cell r of a square grid of side ``spacing`` centred
+on the origin (the CPU platform's nonbonded kernels are single precision), heights
+unchanged. Bonded and external terms are copied with an index offset, so they never couple
+copies; nonbonded terms (excluded volume) would, if two copies came within the cutoff: the
+spacing leaves every copy's particles a margin of several thermal widths, and
+:meth:`Pack.check_apart` is run at every sample, so a copy that strays out of its cell stops
+the run with a clear error instead of interacting silently.
+
+Global parameters (trap angle, force, stiffnesses) are shared: replicas of one point hold
+the same values. Forces that cannot be copied (the chiral ``PythonForce``) make a scene
+unpackable (:func:`packable`); it then runs one Context per replica.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import numpy as np
+import openmm
+
+__all__ = ["replicate_system", "packable", "pack_models", "Pack", "PackError", "grid_offsets"]
+
+
+class PackError(RuntimeError):
+    """A packed copy left its cell (the copies could interact) or cannot be packed."""
+
+
+_COPYABLE = ("HarmonicBondForce", "CustomBondForce", "CustomAngleForce", "CustomExternalForce",
+             "CustomCompoundBondForce", "CustomNonbondedForce", "HarmonicAngleForce")
+
+
+def packable(system: openmm.System) -> tuple[bool, str]:
+    """Whether :func:`replicate_system` can copy every force of ``system`` (and why not)."""
+    for f in system.getForces():
+        name = type(f).__name__
+        if name not in _COPYABLE:
+            return False, f"force {f.getName()!r} ({name}) cannot be copied"
+        if name == "CustomNonbondedForce" and f.getNumInteractionGroups():
+            return False, f"force {f.getName()!r} uses interaction groups"
+    return True, ""
+
+
+def _clone(f: openmm.Force) -> openmm.Force:
+    return openmm.XmlSerializer.deserialize(openmm.XmlSerializer.serialize(f))
+
+
+def replicate_system(system: openmm.System, R: int) -> openmm.System:
+    """R non-interacting copies of ``system``: particle i of copy r is i + r N.
+
+    Bonded, angle, compound-bond and external terms are copied with the index offset; a
+    ``CustomNonbondedForce`` gets every copy's particles (same per-particle parameters) and
+    exclusions. Force groups, names and global parameters are kept (shared by the copies).
+    """
+    ok, why = packable(system)
+    if not ok:
+        raise PackError(f"cannot pack this system: {why}")
+    R = int(R)
+    N = system.getNumParticles()
+    out = openmm.System()
+    for r in range(R):
+        for i in range(N):
+            out.addParticle(system.getParticleMass(i))
+    for r in range(R):
+        for k in range(system.getNumConstraints()):
+            i, j, d = system.getConstraintParameters(k)
+            out.addConstraint(i + r * N, j + r * N, d)
+    for f in system.getForces():
+        g = _clone(f)
+        name = type(f).__name__
+        for r in range(1, R):
+            o = r * N
+            if name == "HarmonicBondForce":
+                for k in range(f.getNumBonds()):
+                    i, j, d, kk = f.getBondParameters(k)
+                    g.addBond(i + o, j + o, d, kk)
+            elif name == "CustomBondForce":
+                for k in range(f.getNumBonds()):
+                    i, j, p = f.getBondParameters(k)
+                    g.addBond(i + o, j + o, p)
+            elif name == "HarmonicAngleForce":
+                for k in range(f.getNumAngles()):
+                    i, j, m, a, kk = f.getAngleParameters(k)
+                    g.addAngle(i + o, j + o, m + o, a, kk)
+            elif name == "CustomAngleForce":
+                for k in range(f.getNumAngles()):
+                    i, j, m, p = f.getAngleParameters(k)
+                    g.addAngle(i + o, j + o, m + o, p)
+            elif name == "CustomExternalForce":
+                for k in range(f.getNumParticles()):
+                    i, p = f.getParticleParameters(k)
+                    g.addParticle(i + o, p)
+            elif name == "CustomCompoundBondForce":
+                for k in range(f.getNumBonds()):
+                    idx, p = f.getBondParameters(k)
+                    g.addBond([i + o for i in idx], p)
+            elif name == "CustomNonbondedForce":
+                for k in range(N):
+                    g.addParticle(f.getParticleParameters(k))
+                for k in range(f.getNumExclusions()):
+                    i, j = f.getExclusionParticles(k)
+                    g.addExclusion(i + o, j + o)
+        out.addForce(g)
+    return out
+
+
+def grid_offsets(R: int, spacing_nm: float) -> np.ndarray:
+    """(R, 3) x-y offsets of a square grid of cells of side ``spacing_nm``, centred."""
+    m = int(math.ceil(math.sqrt(R)))
+    rows = int(math.ceil(R / m))
+    ij = [(r % m, r // m) for r in range(R)]
+    return np.array([[(i - 0.5 * (m - 1)) * spacing_nm, (j - 0.5 * (rows - 1)) * spacing_nm,
+                      0.0] for i, j in ij])
+
+
+def nonbonded_cutoff_nm(system: openmm.System) -> float:
+    """The largest nonbonded cutoff of ``system`` (0 when it has no nonbonded term)."""
+    cut = 0.0
+    for f in system.getForces():
+        if isinstance(f, openmm.CustomNonbondedForce):
+            cut = max(cut, f.getCutoffDistance().value_in_unit(openmm.unit.nanometer))
+    return cut
+
+
+@dataclasses.dataclass
+class Pack:
+    """R copies of a model in one System.
+
+    Attributes
+    ----------
+    model : dnabraid.chains.Model
+        The packed model (its ``system`` holds the R copies, ``positions`` the copies at
+        their offsets, ``bonds`` every copy's bonds); the engine runs it.
+    members : list of Model
+        The replicas' own models (indices 0 ... N-1), as built from their seeds.
+    offsets : ndarray (R, 3), nm
+    half_cell_nm : float
+        A copy's particles must stay within this x-y distance of its offset.
+    """
+
+    model: object
+    members: list
+    offsets: np.ndarray
+    half_cell_nm: float
+
+    @property
+    def n_per_copy(self) -> int:
+        return len(self.members[0].positions)
+
+    def slice(self, r: int) -> slice:
+        n = self.n_per_copy
+        return slice(r * n, (r + 1) * n)
+
+    def split(self, pos) -> list:
+        """Each copy's positions in its own frame (offset removed)."""
+        pos = np.asarray(pos, float)
+        return [pos[self.slice(r)] - self.offsets[r] for r in range(len(self.members))]
+
+    def join(self, positions: list) -> np.ndarray:
+        """Packed positions from each copy's positions in its own frame."""
+        return np.concatenate([np.asarray(p, float) + o for p, o in zip(positions,
+                                                                      self.offsets)])
+
+    def check_apart(self, split_positions: list) -> None:
+        """Raise :class:`PackError` when a copy has left its cell (copies could interact)."""
+        for r, p in enumerate(split_positions):
+            reach = float(np.max(np.abs(p[:, :2])))
+            if reach > self.half_cell_nm:
+                raise PackError(
+                    f"packed replica {r} reached {reach:.0f} nm from its cell centre (cell "
+                    f"half-width {self.half_cell_nm:.0f} nm less the cutoff): packed copies "
+                    "could interact. Run with pack = 1 (one Context per replica)")
+
+
+def pack_models(members: list, *, spacing_nm: float | None = None,
+                reach_nm: float | None = None) -> Pack:
+    """Pack the replicas' models (same scene but seed) into one :class:`Pack`.
+
+    ``reach_nm``: how far in x-y a copy's particles may go from its origin (default: its
+    start's extent plus 8 thermal widths of the pivot, sqrt(kT L / F), and 20 nm, at most
+    the contour length plus the start's extent); the cells are 2 reach + cutoff wide.
+    """
+    m0 = members[0]
+    dt = {round(m.timestep.time_step_ns, 15) for m in members}
+    if len(dt) != 1:
+        raise PackError(f"replicas to pack have different time steps {sorted(dt)}")
+    n = {len(m.positions) for m in members}
+    if len(n) != 1:
+        raise PackError("replicas to pack have different particle counts")
+    cut = nonbonded_cutoff_nm(m0.system)
+    if reach_nm is None:
+        s = m0.scene
+        ext = max(float(np.max(np.abs(m.positions[:, :2]))) for m in members)
+        L = float(getattr(s, "length_nm", 0.0))
+        F = float(getattr(s, "force_pN", 0.0) or 0.0)
+        kT = float(getattr(s, "kT", 4.11))
+        thermal = 8.0 * math.sqrt(kT * L / F) + 20.0 if F > 0 else L
+        reach_nm = ext + min(L, thermal) if L > 0 else ext + 50.0
+    spacing = spacing_nm if spacing_nm is not None else 2.0 * reach_nm + cut
+    offsets = grid_offsets(len(members), spacing)
+    system = replicate_system(m0.system, len(members))
+    N = len(m0.positions)
+    bonds = np.concatenate([m.bonds + r * N for r, m in enumerate(members)]) \
+        if len(m0.bonds) else m0.bonds
+    packed = dataclasses.replace(
+        m0, system=system, positions=np.concatenate([m.positions + o for m, o in
+                                                     zip(members, offsets)]),
+        bonds=bonds)
+    return Pack(model=packed, members=list(members), offsets=offsets,
+                half_cell_nm=0.5 * spacing - 0.5 * cut)

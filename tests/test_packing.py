@@ -1,0 +1,140 @@
+"""Packed replicas (dnabraid.packing): R copies of a scene in one System must be exactly R
+independent systems: the same energy and forces as each copy alone, no coupling through the
+excluded volume, and the same statistics as replicas in their own Contexts (the packed
+tether's error bars are calibrated against the exact discrete WLC)."""
+
+import math
+
+import numpy as np
+import openmm
+import pytest
+from openmm import unit as u
+
+from dnabraid.continuum.wlc import discrete_wlc_exact
+from dnabraid.packing import PackError, grid_offsets, pack_models, packable, replicate_system
+from dnabraid.scenes import make_scene
+
+BRAID = {"length_nm": 60.0, "force_pN": 10.0, "turns": [1.0]}
+
+
+def _energy_forces(system, pos):
+    integ = openmm.VerletIntegrator(1e-3)
+    ctx = openmm.Context(system, integ, openmm.Platform.getPlatformByName("Reference"))
+    ctx.setPositions(pos * u.nanometer)
+    st = ctx.getState(getEnergy=True, getForces=True)
+    e = st.getPotentialEnergy().value_in_unit(u.kilojoule_per_mole)
+    f = st.getForces(asNumpy=True).value_in_unit(u.kilojoule_per_mole / u.nanometer)
+    return e, np.asarray(f)
+
+
+def _members(scene_name, over, R, turns=None):
+    base = make_scene(scene_name, over)
+    out = []
+    for r in range(R):
+        s = make_scene(scene_name, dict(over, seed=base.seed + r + 1))
+        m = s.build()
+        if turns is not None:
+            m.positions[:] = s.start_positions(m, turns)
+        out.append(m)
+    return out
+
+
+@pytest.mark.parametrize("scene_name, over, turns", [
+    ("braid", BRAID, 1.0),  # braided and in contact: WCA, bead sphere, trap, links
+    ("plectoneme", {"length_nm": 60.0, "force_pN": 2.0}, None),  # twist and frames
+    ("tether", {"length_nm": 50.0}, None),
+])
+def test_packed_system_is_the_sum_of_its_copies(scene_name, over, turns):
+    """Energy = sum of the copies' energies and forces = each copy's own forces (to round-
+    off), at each replica's own configuration, with copies on the packing grid."""
+    members = _members(scene_name, over, 3, turns)
+    pack = pack_models(members)
+    e, f = _energy_forces(pack.model.system, pack.model.positions)
+    e_sum = 0.0
+    for r, m in enumerate(members):
+        er, fr = _energy_forces(m.system, m.positions)
+        e_sum += er
+        np.testing.assert_allclose(f[pack.slice(r)], fr, rtol=1e-9, atol=1e-7)
+    assert e == pytest.approx(e_sum, rel=1e-10, abs=1e-8)
+    # the copies sit on a centred grid, their starts within their cells
+    assert np.allclose(pack.offsets.max(axis=0) + pack.offsets.min(axis=0), 0.0)
+    pack.check_apart(pack.split(pack.model.positions))
+
+
+def test_copies_do_not_interact_even_when_close():
+    """A nonbonded term is the only one that could couple copies: bring two braid copies
+    within the WCA range of each other and the packed energy changes (so the test can
+    fail), while at the grid spacing it equals the sum of the copies'."""
+    members = _members("braid", BRAID, 2, 1.0)
+    pack = pack_models(members)
+    sys2 = pack.model.system
+    e_far, _ = _energy_forces(sys2, pack.model.positions)
+    close = pack.model.positions.copy()
+    n = pack.n_per_copy
+    close[n:] = members[1].positions + pack.offsets[0] + np.array([3.0, 0, 0])  # overlapping
+    e_close, _ = _energy_forces(sys2, close)
+    assert e_close > e_far + 1.0  # kJ/mol: the overlapping copies repel
+    with pytest.raises(PackError, match="could interact"):
+        parts = pack.split(pack.model.positions)
+        parts[1] = parts[1] + np.array([pack.half_cell_nm + 1.0, 0.0, 0.0])
+        pack.check_apart(parts)
+
+
+def test_grid_offsets():
+    for R in (1, 2, 3, 4, 5, 9):
+        o = grid_offsets(R, 100.0)
+        assert o.shape == (R, 3) and np.all(o[:, 2] == 0)
+        d = np.linalg.norm(o[:, None] - o[None], axis=-1) + np.eye(R) * 1e9
+        assert d.min() >= 100.0 - 1e-9
+        assert np.abs(o[:, :2]).max() <= 100.0 * math.ceil(math.sqrt(R)) / 2
+
+
+def test_chiral_and_mirror_scenes_are_not_packed():
+    """The chiral term is a PythonForce (cannot be copied) and mirror pairs must be bit-
+    reproducible alone: both run one Context per replica."""
+    s = make_scene("braid", dict(BRAID, alpha=1.0))
+    m = s.build()
+    assert not packable(m.system)[0]
+    with pytest.raises(PackError, match="cannot pack"):
+        replicate_system(m.system, 2)
+    assert s.pack_groups(range(4), 1, "CPU", m) == [(0,), (1,), (2,), (3,)]
+    s = make_scene("braid", dict(BRAID, mirror="original"))
+    assert s.pack_groups(range(4), 1, "CPU", s.build()) == [(0,), (1,), (2,), (3,)]
+    s = make_scene("braid", BRAID)
+    m = s.build()
+    assert s.pack_groups(range(4), 2, "CPU", m) == [(0, 1), (2, 3)]
+    assert s.pack_groups(range(5), 2, "CPU", m) == [(0, 1, 2), (3, 4)]
+    assert make_scene("braid", dict(BRAID, pack=1)).pack_groups(range(2), 1, "CPU", m) \
+        == [(0,), (1,)]
+
+
+def test_packed_tether_is_calibrated_against_the_exact_wlc(tmp_path):
+    """Eight replicas in one Context (exact starts, no wall or self-avoidance): the mean's
+    99 % Student-t interval covers the exact discrete WLC (transfer matrix, computed
+    independently), and the replica means scatter as those of eight replicas run in their
+    own Contexts (F test of the two variances, two-sided 1 %): packing changes the cost, not
+    the statistics. (The within-replica SEM is no yardstick here: the 0.24 us replicas are
+    shorter than the pivot mode, ~1.3 us, and only the exact starts make them honest.)"""
+    from scipy import stats
+
+    base = {"force_pN": 3.0, "length_nm": 25.0, "surface": False, "self_avoidance": False,
+            "steps": 10_000, "equilibration_steps": 0, "frame_interval": 10_000,
+            "replicas": 8, "workers": 1, "seed": 7}
+    d = make_scene("tether", base).dna()
+    res = {}
+    for pack in (8, 1):
+        s = make_scene("tether", dict(base, pack=pack, seed=7 + pack))
+        summ = s.run(str(tmp_path / f"p{pack}"))
+        packed = any("packed into 1 OpenMM Context" in n for n in summ["notes"])
+        assert packed == (pack == 8)
+        res[pack] = summ["points"][0]["extension_nm"]
+    exact = discrete_wlc_exact(s.force_pN, s.n_beads - 1, s.bead_spacing_nm, d.kappa_kT, d.kT,
+                               stretch_k_pN_per_nm=d.k_bond)["extension_nm"]
+    t99 = stats.t(7).ppf(0.995)  # one study per layout: a 99 % interval (fails 1 % by chance)
+    for ext in res.values():
+        assert abs(ext["mean"] - exact) <= t99 * ext["sem"], (ext, exact)
+    a, b = (np.array(res[k]["replica_means"]) for k in (8, 1))
+    assert len(a) == 8 and len(set(np.round(a, 9))) == 8  # distinct replicas
+    F = a.var(ddof=1) / b.var(ddof=1)
+    lo, hi = stats.f(7, 7).ppf([0.005, 0.995])
+    assert lo <= F <= hi, (F, a, b)
