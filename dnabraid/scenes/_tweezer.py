@@ -555,8 +555,8 @@ def _run_replica(scene_dict, group, out, platform, threads, progress) -> list[di
 
 
 def _worker(args):
-    job, queue = args
-    pin_to_one_core_of(job[1][0])  # the group's first replica
+    k, job, queue = args
+    pin_to_one_core_of(k)  # job k of the batch on core k mod cores
     acc = [0]
 
     def progress(n):  # batch the messages: one per >= 20000 steps
@@ -574,7 +574,7 @@ def _worker(args):
 
 
 def pin_to_one_core_of(r: int) -> None:
-    """Pin a worker process to one usable core, replica r to core r mod n."""
+    """Pin a worker process to one usable core, job r to core r mod n."""
     try:
         cores = sorted(os.sched_getaffinity(0))
         os.sched_setaffinity(0, {cores[r % len(cores)]})
@@ -596,7 +596,7 @@ def _run_jobs(jobs, workers: int, bar) -> list:
     with ctx.Manager() as mgr:
         q = mgr.Queue()
         with ctx.Pool(workers) as pool:
-            res = pool.map_async(_worker, [(job, q) for job in jobs])
+            res = pool.map_async(_worker, [(k, job, q) for k, job in enumerate(jobs)])
             while not res.ready():
                 try:
                     n = q.get(timeout=0.5)

@@ -36,10 +36,22 @@ class Braid(TurnedScene):
                            "braided by turning the bead: extension, torque and catenation "
                            "against turns")
 
-    turns: tuple = key((-2.0, -1.0, 0.0, 1.0, 2.0), "turns", "list of bead turn values n "
+    # The default scene (2026-12-01, README "How the default was chosen"): 2 x 60 nm at
+    # 20 pN, half and whole turns, 8 packed replicas of 3.5e5 steps at safety 0.6: every
+    # point converged (R-hat <= 1.015, ESS >= 559 at 4e5 steps) in ~2 minutes on 2 cores.
+    # At 10 pN the pendulum mode of the bead, tau = L (2 zeta_l L / 3 + 2 zeta + zeta_C) / F
+    # (docs/slow_modes.md), left n = 0 at ESS 87 with 7e5 steps.
+    force_pN: float = key(20.0, "pN", "constant force pulling the magnetic bead up (> 0)")
+    length_nm: float = key(60.0, "nm", "contour length of each DNA molecule")
+    turns: tuple = key((-1.0, -0.5, 0.0, 0.5, 1.0), "turns", "list of bead turn values n "
                        "(catenation imposed by the rotational trap)")
-    steps: int = key(90000, "steps", "sampling steps per turn value and replica (after "
+    steps: int = key(350000, "steps", "sampling steps per turn value and replica (after "
                      "equilibration)")
+    replicas: int = key(8, "", "independent replicas per turn value, each from its own start "
+                        "(seed); the error bar is the scatter of their means (Student t)")
+    timestep_safety: float = key(0.6, "", "time step = safety x 2 / (mobility x largest "
+                                 "stiffness); 0.6: no resolved bias "
+                                 "(workflows/results/integrator_bias.md)")
     equilibration_steps: int = key(20000, "steps", "equilibration steps after each change "
                                    "of turns (more is cut from the data where it is detected)")
     tether_separation_nm: float = key(40.0, "nm", "distance between the two tether points "
