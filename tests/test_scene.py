@@ -18,7 +18,7 @@ def test_defaults_resolve_and_roundtrip(tmp_path):
         p.write_text(s.to_toml())
         assert make_scene(str(p)) == s
     s = make_scene("braid")
-    assert s.n_beads == 41 and len(s.build().chains) == 2
+    assert s.n_beads == 13 and len(s.build().chains) == 2
     assert s.effective_diameter_nm == pytest.approx(4.9)
 
 

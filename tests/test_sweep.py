@@ -93,7 +93,8 @@ def test_spec_file_scene_relative_and_names(tmp_path):
 
 
 def test_spec_toml_round_trip(tmp_path):
-    spec = sweep.load_spec({"scene": "braid", "fixed": {"steps": 1000, "surface": False},
+    spec = sweep.load_spec({"scene": "braid", "fixed": {"steps": 1000, "surface": False,
+                                                       "length_nm": 200.0},
                             "grid": {"turns": [[0, 1], [0, -1]], "salt_mM": [10, 150.5]}},
                            out=str(tmp_path / "sw"))
     path = tmp_path / "again.toml"

@@ -28,6 +28,8 @@ from dnabraid.analysis.maxwell import torque_from_extension
 from dnabraid.scenes import make_scene
 
 HERE = pathlib.Path(__file__).resolve().parent
+#: the default braid before 2026-12-01, which this workflow's table was measured on
+OLD_DEFAULT = {"length_nm": 200.0, "timestep_safety": 0.3}
 
 
 def main(argv=None) -> int:
@@ -46,7 +48,9 @@ def main(argv=None) -> int:
     gs = np.empty_like(z)
     wall = 0.0
     for i, f in enumerate(F):
-        sc = make_scene("braid", {"force_pN": float(f), "turns": list(n), "steps": args.steps,
+        # the 2 x 200 nm braid of 2026-11-30 (the default before 2026-12-01)
+        sc = make_scene("braid", {**OLD_DEFAULT, "force_pN": float(f), "turns": list(n),
+                                  "steps": args.steps,
                                   "equilibration_steps": args.steps // 4,
                                   "replicas": args.replicas, "seed": 3})
         t0 = time.perf_counter()

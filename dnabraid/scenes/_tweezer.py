@@ -98,8 +98,9 @@ class TweezerScene(DNAQuantities, Scene):
     max_replicas: int = key(16, "", "budget: most replicas per point when a target is set")
     pack: int = key(0, "", "replicas packed into one OpenMM Context (one System of "
                     "non-interacting copies; the CPU platform's fixed cost per step is paid "
-                    "once: 2.0x faster at 2, 2.3x at 4, workflows/benchmark_replicas.py); 0 = "
-                    "replicas / workers when the scene's forces can be copied, 1 = off")
+                    "once: 2 x 60 nm braid 1.8x faster at 2, 2.9x at 4, 4.2x at 8, "
+                    "workflows/results/benchmark_replicas_small.txt); 0 = replicas / workers "
+                    "when the scene's forces can be copied, 1 = off")
     integrator: str = key("euler", "", "'euler': Euler-Maruyama (OpenMM BrownianIntegrator); "
                           "'lm': Leimkuhler-Matthews, same cost per step, smaller time-step "
                           "bias (workflows/results/integrator_bias.md)")
@@ -429,7 +430,10 @@ class TweezerScene(DNAQuantities, Scene):
         def fmt(d, p=2):
             if d["mean"] is None:
                 return "-"
-            return f"{d['mean']:.{p}f} +- {d['sem']:.{p}f}"
+            sem = d["sem"]
+            if sem and sem > 0 and math.isfinite(sem):  # two significant digits of the SEM
+                p = min(4, max(p, 1 - math.floor(math.log10(sem))))
+            return f"{d['mean']:.{p}f} +- {sem:.{p}f}"
 
         for pt in summary["points"]:
             mark = "" if pt.get("converged", True) else "  NOT CONVERGED"
@@ -438,6 +442,12 @@ class TweezerScene(DNAQuantities, Scene):
                   file=file)
         print("+- : standard error of the mean across independent replicas (Student-t 95% "
               "intervals in summary.json)", file=file)
+        pts = summary["points"]
+        if pts and all(pt.get("converged", False) for pt in pts):
+            ess = min(v for pt in pts for v in pt.get("effective_sample_size", {}).values()
+                      if v is not None)
+            print(f"all {len(pts)} points converged (split R-hat and bulk ESS across "
+                  f"replicas; smallest ESS {ess:.0f})", file=file)
         if self.has_targets():
             pr = summary["points"][0]["precision"]
             met = all(all(pt["precision"]["met"].values()) for pt in summary["points"])

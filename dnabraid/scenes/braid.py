@@ -37,15 +37,17 @@ class Braid(TurnedScene):
                            "against turns")
 
     # The default scene (2026-12-01, README "How the default was chosen"): 2 x 60 nm at
-    # 20 pN, half and whole turns, 8 packed replicas of 3.5e5 steps at safety 0.6: every
-    # point converged (R-hat <= 1.015, ESS >= 559 at 4e5 steps) in ~2 minutes on 2 cores.
+    # 20 pN, half and whole turns, 8 packed replicas of 4.5e5 steps at safety 0.6: every
+    # point converged (R-hat <= 1.015, ESS >= 559 at 4e5 steps) in ~2.4 minutes on 2 cores.
+    # At 3.5e5 steps 3 of 30 points in 6 seeds were flagged (one replica's equilibration
+    # cut > 50 %: a slow fluctuation, not a transient), hence 4.5e5.
     # At 10 pN the pendulum mode of the bead, tau = L (2 zeta_l L / 3 + 2 zeta + zeta_C) / F
     # (docs/slow_modes.md), left n = 0 at ESS 87 with 7e5 steps.
     force_pN: float = key(20.0, "pN", "constant force pulling the magnetic bead up (> 0)")
     length_nm: float = key(60.0, "nm", "contour length of each DNA molecule")
     turns: tuple = key((-1.0, -0.5, 0.0, 0.5, 1.0), "turns", "list of bead turn values n "
                        "(catenation imposed by the rotational trap)")
-    steps: int = key(350000, "steps", "sampling steps per turn value and replica (after "
+    steps: int = key(450000, "steps", "sampling steps per turn value and replica (after "
                      "equilibration)")
     replicas: int = key(8, "", "independent replicas per turn value, each from its own start "
                         "(seed); the error bar is the scatter of their means (Student t)")
