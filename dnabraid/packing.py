@@ -17,8 +17,10 @@ spacing leaves every copy's particles a margin of several thermal widths, and
 the run with a clear error instead of interacting silently.
 
 Global parameters (trap angle, force, stiffnesses) are shared: replicas of one point hold
-the same values. Forces that cannot be copied (the chiral ``PythonForce``) make a scene
-unpackable (:func:`packable`); it then runs one Context per replica.
+the same values. A force that cannot be copied makes a scene unpackable (:func:`packable`;
+it then runs one Context per replica) unless the model says how to build it over every
+copy (``model.extra["rebuild_forces"]``): the chiral ``PythonForce`` is built once over all
+copies' strands, its own distance-based pair search never pairing two copies.
 """
 
 from __future__ import annotations
@@ -40,10 +42,13 @@ _COPYABLE = ("HarmonicBondForce", "CustomBondForce", "CustomAngleForce", "Custom
              "CustomCompoundBondForce", "CustomNonbondedForce", "HarmonicAngleForce")
 
 
-def packable(system: openmm.System) -> tuple[bool, str]:
-    """Whether :func:`replicate_system` can copy every force of ``system`` (and why not)."""
+def packable(system: openmm.System, rebuild: dict | None = None) -> tuple[bool, str]:
+    """Whether :func:`replicate_system` can copy every force of ``system`` (and why not);
+    forces named in ``rebuild`` are built anew over all copies instead of copied."""
     for f in system.getForces():
         name = type(f).__name__
+        if rebuild and f.getName() in rebuild:
+            continue
         if name not in _COPYABLE:
             return False, f"force {f.getName()!r} ({name}) cannot be copied"
         if name == "CustomNonbondedForce" and f.getNumInteractionGroups():
@@ -55,14 +60,18 @@ def _clone(f: openmm.Force) -> openmm.Force:
     return openmm.XmlSerializer.deserialize(openmm.XmlSerializer.serialize(f))
 
 
-def replicate_system(system: openmm.System, R: int) -> openmm.System:
+def replicate_system(system: openmm.System, R: int, rebuild: dict | None = None
+                     ) -> openmm.System:
     """R non-interacting copies of ``system``: particle i of copy r is i + r N.
 
     Bonded, angle, compound-bond and external terms are copied with the index offset; a
     ``CustomNonbondedForce`` gets every copy's particles (same per-particle parameters) and
     exclusions. Force groups, names and global parameters are kept (shared by the copies).
+    ``rebuild`` maps a force's name to ``(make, chains)``: that force (a ``PythonForce``,
+    such as the chiral term) is made anew by ``make(all_chains)`` over every copy's chains
+    (``chains`` offset by r N), its own pair search keeping the copies apart.
     """
-    ok, why = packable(system)
+    ok, why = packable(system, rebuild)
     if not ok:
         raise PackError(f"cannot pack this system: {why}")
     R = int(R)
@@ -76,6 +85,12 @@ def replicate_system(system: openmm.System, R: int) -> openmm.System:
             i, j, d = system.getConstraintParameters(k)
             out.addConstraint(i + r * N, j + r * N, d)
     for f in system.getForces():
+        if rebuild and f.getName() in rebuild:
+            make, chains = rebuild[f.getName()]
+            g = make([np.asarray(c, int) + r * N for r in range(R) for c in chains])
+            g.setForceGroup(f.getForceGroup())
+            out.addForce(g)
+            continue
         g = _clone(f)
         name = type(f).__name__
         for r in range(1, R):
@@ -208,7 +223,7 @@ def pack_models(members: list, *, spacing_nm: float | None = None,
         reach_nm = ext + min(L, thermal) if L > 0 else ext + 50.0
     spacing = spacing_nm if spacing_nm is not None else 2.0 * reach_nm + cut
     offsets = grid_offsets(len(members), spacing)
-    system = replicate_system(m0.system, len(members))
+    system = replicate_system(m0.system, len(members), m0.extra.get("rebuild_forces"))
     N = len(m0.positions)
     bonds = np.concatenate([m.bonds + r * N for r, m in enumerate(members)]) \
         if len(m0.bonds) else m0.bonds

@@ -41,12 +41,15 @@ def _members(scene_name, over, R, turns=None):
 
 @pytest.mark.parametrize("scene_name, over, turns", [
     ("braid", BRAID, 1.0),  # braided and in contact: WCA, bead sphere, trap, links
+    ("braid", dict(BRAID, alpha=2.0), 1.0),  # the chiral PythonForce, rebuilt over copies
     ("plectoneme", {"length_nm": 60.0, "force_pN": 2.0}, None),  # twist and frames
     ("tether", {"length_nm": 50.0}, None),
 ])
 def test_packed_system_is_the_sum_of_its_copies(scene_name, over, turns):
     """Energy = sum of the copies' energies and forces = each copy's own forces (to round-
-    off), at each replica's own configuration, with copies on the packing grid."""
+    off), at each replica's own configuration, with copies on the packing grid. The braid
+    copies are braided at n = 1 and in contact, so WCA, bead sphere and (alpha != 0) the
+    chiral term all act."""
     members = _members(scene_name, over, 3, turns)
     pack = pack_models(members)
     e, f = _energy_forces(pack.model.system, pack.model.positions)
@@ -89,15 +92,18 @@ def test_grid_offsets():
         assert np.abs(o[:, :2]).max() <= 100.0 * math.ceil(math.sqrt(R)) / 2
 
 
-def test_chiral_and_mirror_scenes_are_not_packed():
-    """The chiral term is a PythonForce (cannot be copied) and mirror pairs must be bit-
-    reproducible alone: both run one Context per replica."""
+def test_chiral_scenes_pack_and_mirror_pairs_do_not():
+    """The chiral term is a PythonForce: it cannot be copied, so a packed System builds one
+    over every copy's strands (model.extra["rebuild_forces"]); without that recipe the
+    System cannot be packed. Mirror pairs must be bit-reproducible alone: one Context per
+    replica."""
     s = make_scene("braid", dict(BRAID, alpha=1.0))
     m = s.build()
     assert not packable(m.system)[0]
     with pytest.raises(PackError, match="cannot pack"):
         replicate_system(m.system, 2)
-    assert s.pack_groups(range(4), 1, "CPU", m) == [(0,), (1,), (2,), (3,)]
+    assert packable(m.system, m.extra["rebuild_forces"])[0]
+    assert s.pack_groups(range(4), 1, "CPU", m) == [(0, 1, 2, 3)]
     s = make_scene("braid", dict(BRAID, mirror="original"))
     assert s.pack_groups(range(4), 1, "CPU", s.build()) == [(0,), (1,), (2,), (3,)]
     s = make_scene("braid", BRAID)

@@ -99,8 +99,9 @@ class TweezerScene(DNAQuantities, Scene):
     pack: int = key(0, "", "replicas packed into one OpenMM Context (one System of "
                     "non-interacting copies; the CPU platform's fixed cost per step is paid "
                     "once: 2 x 60 nm braid 1.8x faster at 2, 2.9x at 4, 4.2x at 8, "
-                    "workflows/results/benchmark_replicas_small.txt); 0 = replicas / workers "
-                    "when the scene's forces can be copied, 1 = off")
+                    "workflows/results/benchmark_replicas_small.txt; with the chiral term, rebuilt "
+                    "over all copies, 2.3x at 4); 0 = replicas / workers (mirror pairs: 1), "
+                    "1 = off")
     integrator: str = key("euler", "", "'euler': Euler-Maruyama (OpenMM BrownianIntegrator); "
                           "'lm': Leimkuhler-Matthews, same cost per step, smaller time-step "
                           "bias (workflows/results/integrator_bias.md)")
@@ -202,10 +203,17 @@ class TweezerScene(DNAQuantities, Scene):
             # alpha = 0. Its curvature per unit alpha is at most ~0.1 A / lambda_D^2 per nm
             # of partner (A ~ 1/(2 Delta)), summed over ~2 Delta of partner and both ends.
             d = kit.dna
-            kit.add_force(chiral_force(kit.chains, self.alpha, delta_nm=d.diameter_nm,
-                                       debye_nm=d.debye_nm, bead_spacing_nm=d.bead_spacing_nm,
-                                       name="chiral"), "chiral",
+
+            def make_chiral(chains, d=d, alpha=self.alpha):
+                return chiral_force(chains, alpha, delta_nm=d.diameter_nm, debye_nm=d.debye_nm,
+                                    bead_spacing_nm=d.bead_spacing_nm, name="chiral")
+
+            kit.add_force(make_chiral(kit.chains), "chiral",
                           rate=abs(self.alpha) * 0.1 / d.debye_nm**2 * 4.0 / d.zeta_bead)
+            # the chiral term is a PythonForce, which cannot be copied: packed replicas
+            # (dnabraid.packing) build one over every copy's strands instead
+            kit.extra["rebuild_forces"] = {"chiral": (make_chiral, [c.copy() for c in
+                                                                   kit.chains])}
         params["alpha_pN"] = self.alpha
         return kit.finish(self, safety=self.timestep_safety, params=params)
 
@@ -271,14 +279,16 @@ class TweezerScene(DNAQuantities, Scene):
     def pack_groups(self, replicas, workers: int, platform: str, model) -> list[tuple]:
         """Replicas grouped into packs (one OpenMM Context each): ``pack`` per group, or
         with ``pack = 0`` as many as spread the replicas evenly over the workers; one per
-        group when the scene cannot be packed (a force that cannot be copied, the chiral
-        term's PythonForce, or mirror-coupled pairs, which must be bit-reproducible)."""
+        group when the scene cannot be packed (a force that cannot be copied,
+        unless the scene says how to rebuild it over all copies, as the chiral term does;
+        or mirror-coupled pairs, which must be bit-reproducible)."""
         from ..packing import packable
 
         reps = list(replicas)
         size = self.pack
         if size != 1 and (getattr(self, "mirror", "off") != "off"
-                          or not packable(model.system)[0]):
+                          or not packable(model.system,
+                                          model.extra.get("rebuild_forces"))[0]):
             size = 1
         if size == 0:
             w = max(1, workers if platform == "CPU" else 1)
