@@ -31,7 +31,8 @@ import math
 import numpy as np
 import openmm
 
-__all__ = ["replicate_system", "packable", "pack_models", "Pack", "PackError", "grid_offsets"]
+__all__ = ["replicate_system", "packable", "pack_models", "Pack", "PackError", "grid_offsets",
+           "group_replicas"]
 
 
 class PackError(RuntimeError):
@@ -127,6 +128,20 @@ def replicate_system(system: openmm.System, R: int, rebuild: dict | None = None
                     g.addExclusion(i + o, j + o)
         out.addForce(g)
     return out
+
+
+def group_replicas(replicas, size: int, workers: int, platform: str, can_pack: bool
+                   ) -> list[tuple]:
+    """Replicas grouped into packs (one OpenMM Context each): ``size`` per group, or with
+    ``size = 0`` as many as spread the replicas evenly over the workers (one worker off
+    the CPU platform); one per group when the scene cannot be packed."""
+    reps = list(replicas)
+    if not can_pack:
+        size = 1
+    if size == 0:
+        w = max(1, workers if platform == "CPU" else 1)
+        size = max(1, math.ceil(len(reps) / w))
+    return [tuple(reps[i:i + size]) for i in range(0, len(reps), size)]
 
 
 def grid_offsets(R: int, spacing_nm: float) -> np.ndarray:

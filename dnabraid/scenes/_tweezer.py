@@ -282,18 +282,11 @@ class TweezerScene(DNAQuantities, Scene):
         group when the scene cannot be packed (a force that cannot be copied,
         unless the scene says how to rebuild it over all copies, as the chiral term does;
         or mirror-coupled pairs, which must be bit-reproducible)."""
-        from ..packing import packable
+        from ..packing import group_replicas, packable
 
-        reps = list(replicas)
-        size = self.pack
-        if size != 1 and (getattr(self, "mirror", "off") != "off"
-                          or not packable(model.system,
-                                          model.extra.get("rebuild_forces"))[0]):
-            size = 1
-        if size == 0:
-            w = max(1, workers if platform == "CPU" else 1)
-            size = max(1, math.ceil(len(reps) / w))
-        return [tuple(reps[i:i + size]) for i in range(0, len(reps), size)]
+        can = (getattr(self, "mirror", "off") == "off"
+               and packable(model.system, model.extra.get("rebuild_forces"))[0])
+        return group_replicas(replicas, self.pack, workers, platform, can)
 
     def replica_seed(self, r: int) -> int:
         return self.seed * MAX_REPLICAS + r

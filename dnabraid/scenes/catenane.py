@@ -70,6 +70,7 @@ from ..forces.reference_chiral import chiral_energy_forces, default_subdivisions
 from ..geometry.curves import crossing_angles, gauss_linking_number, writhe
 from ..geometry.twist import ring_twist
 from ..observables import Observable
+from ..packing import group_replicas, packable
 from ..protocols import TurnSchedule
 from ._tweezer import MAX_REPLICAS, _run_jobs, _usable_cores
 from .base import DNAQuantities, Scene, SceneError, key, resolve_salt_alpha
@@ -294,6 +295,9 @@ class Catenane(DNAQuantities, Scene):
     seed: int = key(1, "", f"random seed (0 ... {MAX_SEED // MAX_REPLICAS})")
     replicas: int = key(2, "", "independent replicas (their scatter is the error bar)")
     workers: int = key(0, "", "processes running replicas at once; 0 = one per usable core")
+    pack: int = key(0, "", "replicas packed into one OpenMM Context (non-interacting copies, "
+                    "dnabraid.packing; the chiral term is built over all copies); 0 = "
+                    "replicas / workers, 1 = off")
     timestep_safety: float = key(0.3, "", "time step = safety x 2 / (mobility x largest "
                                  "stiffness)")
     integrator: str = key("lm", "", "'lm' (Leimkuhler-Matthews: per-joint twist variance "
@@ -368,6 +372,7 @@ class Catenane(DNAQuantities, Scene):
         need(0 <= self.seed <= MAX_SEED // MAX_REPLICAS, "seed",
              f"must be in [0, {MAX_SEED // MAX_REPLICAS}]")
         need(1 <= self.replicas <= MAX_REPLICAS, "replicas", f"must be in [1, {MAX_REPLICAS}]")
+        need(0 <= self.pack <= MAX_REPLICAS, "pack", f"must be in [0, {MAX_REPLICAS}] (0 = auto)")
         need(self.workers >= 0, "workers", "must be >= 0 (0 = one per usable core)")
         need(0 < self.timestep_safety <= 0.9, "timestep_safety", "must be in (0, 0.9]")
         need(self.integrator in INTEGRATORS, "integrator", f"allowed: {', '.join(INTEGRATORS)}")
@@ -401,10 +406,17 @@ class Catenane(DNAQuantities, Scene):
         if self.alpha != 0.0:
             # Kornyshev chiral term between facing segments, the rings closed (seam
             # segments included); its rate as in the tweezer scenes
-            kit.add_force(chiral_force(rings, self.alpha, delta_nm=d.diameter_nm,
-                                       debye_nm=d.debye_nm, bead_spacing_nm=d.bead_spacing_nm,
-                                       closed=True, name="chiral"), "chiral",
+
+            def make_chiral(chains, d=d, alpha=self.alpha):
+                return chiral_force(chains, alpha, delta_nm=d.diameter_nm, debye_nm=d.debye_nm,
+                                    bead_spacing_nm=d.bead_spacing_nm, closed=True,
+                                    name="chiral")
+
+            kit.add_force(make_chiral(rings), "chiral",
                           rate=abs(self.alpha) * 0.1 / d.debye_nm**2 * 4.0 / d.zeta_bead)
+            # packed replicas build one chiral term over every copy's rings
+            kit.extra["rebuild_forces"] = {"chiral": (make_chiral, [np.asarray(r, int).copy()
+                                                                   for r in rings])}
         kit.bound("stretch", "bend", "wca", "chiral", "twist_on_dna")
         kit.bound("frame", "twist")
         kit.sides = np.concatenate(sides)
@@ -512,9 +524,10 @@ class Catenane(DNAQuantities, Scene):
         obs = self.observables(model)
         workers = self.workers or _usable_cores()
         R = self.replicas
-        nw = max(1, min(workers, R)) if platform == "CPU" else 1
-        jobs = [(self.to_dict(), (r,), out, platform, threads if nw == 1 else 1)
-                for r in range(R)]
+        groups = group_replicas(range(R), self.pack, workers, platform,
+                                packable(model.system, model.extra.get("rebuild_forces"))[0])
+        nw = max(1, min(workers, len(groups))) if platform == "CPU" else 1
+        jobs = [(self.to_dict(), g, out, platform, threads if nw == 1 else 1) for g in groups]
         bar = progress_factory(sched.total_steps * R) if progress_factory else None
         try:
             results = [x for res in _run_jobs(jobs, nw, bar) for x in res]
@@ -539,6 +552,10 @@ class Catenane(DNAQuantities, Scene):
         if not pt["converged"]:
             notes.append("NOT CONVERGED: " + pt["convergence_reason"] + "; raise `steps` or "
                          "`replicas`")
+        if any(len(g) > 1 for g in groups):
+            notes.append(f"replicas packed into {len(groups)} OpenMM Context(s) of "
+                         f"{', '.join(str(len(g)) for g in groups)} non-interacting copies "
+                         "(key `pack`)")
         n_part = model.system.getNumParticles()
         summary = rundir.Summary(
             scene=self.to_dict(), wall_time_s=wall, platform=platform,
