@@ -169,7 +169,7 @@ def _run_members(engine, schedule, members, ckdir, chk_path, *, progress=None,
                 ob.reset(seg.start_turns, p)
         fail_dir = m0.out if len(members) == 1 else os.path.dirname(ckdir)
 
-        def observe(pos, every_frame, writers=None):
+        def observe(pos, every_frame, writers=None, split=split, ctxs=ctxs):
             parts = split(pos)
             if check is not None:
                 check(parts)
