@@ -21,7 +21,8 @@ checkpoints). The Leimkuhler-Matthews integrator keeps the time-step bias of
 configurational averages ~1 % (tests/test_catenane.py).
 
 Usage: python workflows/catenane.py [--steps 60000] [--replicas 2] [--alpha 1.0]
-       [--points ring mirror contact alpha] [--out runs/catenane_wf]
+       [--points ring mirror contact alpha] [--sweep-alpha A ...] [--sweep-dlk N]
+       [--sweep-start apart|contact] [--out runs/catenane_wf]
 ("contact": the mirror pair again from a start with the rings' strands 1.3 diameters apart)
 """
 
@@ -89,6 +90,8 @@ def main(argv=None) -> int:
                     help="alphas (pN) of the handedness sweep at --sweep-dlk (the mirror "
                          "pair's (+alpha, dLk=-1) point is reused)")
     ap.add_argument("--sweep-dlk", type=int, default=-1)
+    ap.add_argument("--sweep-start", default="apart", choices=["apart", "contact"],
+                    help="start of the alpha sweep's points ('contact': rings 1.3 d apart)")
     ap.add_argument("--points", nargs="+", default=["ring", "mirror", "alpha"])
     ap.add_argument("--out", default="runs/catenane_wf")
     ap.add_argument("--table", default=str(HERE / "results" / "catenane.md"))
@@ -137,7 +140,7 @@ def main(argv=None) -> int:
         for x in args.sweep_alpha:
             if "mirror" in args.points and x == a and args.sweep_dlk == -1:
                 continue
-            rows.append(point(x, args.sweep_dlk, 1))
+            rows.append(point(x, args.sweep_dlk, 1, args.sweep_start))
     if rows:
         lines += ["## 2-3. two linked rings, 144 nm each, 1 M (Delta = 2.9 nm, Delta/L = 0.02)",
                   "", "| point | Wr_1 | Wr_2 | Tw_1 | braid angle eta (rad) | handedness | "
