@@ -213,8 +213,12 @@ class Pack:
 
 
 def pack_models(members: list, *, spacing_nm: float | None = None,
-                reach_nm: float | None = None) -> Pack:
+                reach_nm: float | None = None, line: bool = False) -> Pack:
     """Pack the replicas' models (same scene but seed) into one :class:`Pack`.
+
+    ``line``: copies along x only (offsets with y = z = 0), so that the y -> -y mirror of
+    the packed System is the pack of the mirrored copies, exactly: mirror-coupled pairs
+    (:mod:`dnabraid.analysis.mirror`) pack this way.
 
     ``reach_nm``: how far in x-y a copy's particles may go from its origin (default: its
     start's extent plus 8 thermal widths of the pivot, sqrt(kT L / F), and 20 nm, at most
@@ -237,7 +241,11 @@ def pack_models(members: list, *, spacing_nm: float | None = None,
         thermal = 8.0 * math.sqrt(kT * L / F) + 20.0 if F > 0 else L
         reach_nm = ext + min(L, thermal) if L > 0 else ext + 50.0
     spacing = spacing_nm if spacing_nm is not None else 2.0 * reach_nm + cut
-    offsets = grid_offsets(len(members), spacing)
+    if line:
+        offsets = np.array([[(r - 0.5 * (len(members) - 1)) * spacing, 0.0, 0.0]
+                            for r in range(len(members))])
+    else:
+        offsets = grid_offsets(len(members), spacing)
     system = replicate_system(m0.system, len(members), m0.extra.get("rebuild_forces"))
     N = len(m0.positions)
     bonds = np.concatenate([m.bonds + r * N for r, m in enumerate(members)]) \

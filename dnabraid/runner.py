@@ -129,8 +129,10 @@ def _run_members(engine, schedule, members, ckdir, chk_path, *, progress=None,
     frame_cols = {k: v for ob in obs0 if ob.every == "frame" for k, v in ob.columns.items()}
     trap = m0.ctx.get("trap_parameter")
     axis = getattr(s, "mirror_axis", None)
-    if axis is not None and len(members) > 1:
-        raise ValueError("mirror-coupled replicas cannot be packed")
+    if axis is not None and any(np.broadcast_to(np.asarray(m.offset, float), (3,))[axis]
+                                != 0.0 for m in members):
+        raise ValueError("mirror-coupled replicas pack only along the other axes "
+                         "(dnabraid.packing.pack_models(line=True))")
     dirs: list[list[str]] = [[] for _ in members]
     for seg in schedule:
         pdirs = [point_dir(m.out, seg) for m in members]
@@ -252,11 +254,15 @@ def _build_start(engine, members, seg, init, trap, axis) -> None:
         engine.set_parameter(trap, TWO_PI * seg.start_turns)
         engine.minimise()
     else:
-        # the image of a mirror-coupled pair (always alone in its Context): minimise in the
-        # original's frame (the minimiser is not mirror-symmetric to round-off), then
-        # mirror, so that without a chiral term the image starts exactly where the
-        # original's mirror does
-        engine.set_positions(_mirrored(built[0], axis))
+        # the image of a mirror-coupled pair: minimise in the original's frame (the
+        # minimiser is not mirror-symmetric to round-off), then mirror, so that without a
+        # chiral term the image starts exactly where the original's mirror does. Packed
+        # copies sit on the mirror plane's axis (offsets 0 along ``axis``), so mirroring
+        # the whole pack mirrors every copy in place.
+        pos = engine.positions()
+        for m, b in zip(members, built):
+            pos[m.sl] = _mirrored(b, axis) + m.offset
+        engine.set_positions(pos)
         engine.set_parameter(trap, -TWO_PI * seg.start_turns)
         engine.minimise()
         engine.set_positions(_mirrored(engine.positions(), axis))

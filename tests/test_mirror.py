@@ -19,17 +19,21 @@ SMALL = dict(length_nm=60.0, force_pN=2.0, tether_separation_nm=30.0, replicas=2
              seed=5, workers=1)
 
 
-def _pair(tmp_path, alpha, n=2.0):
+def _pair(tmp_path, alpha, n=2.0, pack=0):
     out = {}
     for mode, turns in (("original", [n]), ("image", [-n])):
-        make_scene("braid", dict(SMALL, alpha=alpha, mirror=mode, turns=turns)).run(
-            str(tmp_path / mode))
+        make_scene("braid", dict(SMALL, alpha=alpha, mirror=mode, turns=turns,
+                                 pack=pack)).run(str(tmp_path / mode))
         out[mode] = json.loads((tmp_path / mode / "summary.json").read_text())
     return out
 
 
-def test_mirror_pair_is_exact_without_chirality(tmp_path):
-    out = _pair(tmp_path, 0.0)
+@pytest.mark.parametrize("pack", [1, 2])
+def test_mirror_pair_is_exact_without_chirality(tmp_path, pack):
+    """Alone in its Context (pack = 1) or with the other replica packed beside it along x
+    (pack = 2), the image is the original's mirror."""
+    out = _pair(tmp_path, 0.0, pack=pack)
+    assert any("packed" in x for x in out["image"]["notes"]) == (pack == 2)
     z = paired_asymmetry(out["original"], out["image"], "extension_nm")[0]
     g = paired_asymmetry(out["original"], out["image"], "torque_pN_nm")[0]
     c = paired_asymmetry(out["original"], out["image"], "catenation")[0]

@@ -97,11 +97,11 @@ def test_grid_offsets():
         assert np.abs(o[:, :2]).max() <= 100.0 * math.ceil(math.sqrt(R)) / 2
 
 
-def test_chiral_scenes_pack_and_mirror_pairs_do_not():
+def test_chiral_and_mirror_scenes_pack():
     """The chiral term is a PythonForce: it cannot be copied, so a packed System builds one
     over every copy's strands (model.extra["rebuild_forces"]); without that recipe the
-    System cannot be packed. Mirror pairs must be bit-reproducible alone: one Context per
-    replica."""
+    System cannot be packed. Mirror pairs pack too, along x only (tests/test_mirror.py
+    checks that the packed image is still the exact mirror)."""
     s = make_scene("braid", dict(BRAID, alpha=1.0))
     m = s.build()
     assert not packable(m.system)[0]
@@ -110,7 +110,9 @@ def test_chiral_scenes_pack_and_mirror_pairs_do_not():
     assert packable(m.system, m.extra["rebuild_forces"])[0]
     assert s.pack_groups(range(4), 1, "CPU", m) == [(0, 1, 2, 3)]
     s = make_scene("braid", dict(BRAID, mirror="original"))
-    assert s.pack_groups(range(4), 1, "CPU", s.build()) == [(0,), (1,), (2,), (3,)]
+    assert s.pack_groups(range(4), 1, "CPU", s.build()) == [(0, 1, 2, 3)]
+    members = _members("braid", dict(BRAID, mirror="image"), 3, 1.0)
+    assert np.all(pack_models(members, line=True).offsets[:, 1:] == 0.0)
     s = make_scene("braid", BRAID)
     m = s.build()
     assert s.pack_groups(range(4), 2, "CPU", m) == [(0, 1), (2, 3)]

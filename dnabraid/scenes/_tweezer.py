@@ -100,7 +100,8 @@ class TweezerScene(DNAQuantities, Scene):
                     "non-interacting copies; the CPU platform's fixed cost per step is paid "
                     "once: 2 x 60 nm braid 1.8x faster at 2, 2.9x at 4, 4.2x at 8, "
                     "workflows/results/benchmark_replicas_small.txt; with the chiral term, rebuilt "
-                    "over all copies, 2.3x at 4); 0 = replicas / workers (mirror pairs: 1), "
+                    "over all copies, 2.3x at 4; mirror pairs pack along x); 0 = replicas / "
+                    "workers, "
                     "1 = off")
     integrator: str = key("euler", "", "'euler': Euler-Maruyama (OpenMM BrownianIntegrator); "
                           "'lm': Leimkuhler-Matthews, same cost per step, smaller time-step "
@@ -280,12 +281,12 @@ class TweezerScene(DNAQuantities, Scene):
         """Replicas grouped into packs (one OpenMM Context each): ``pack`` per group, or
         with ``pack = 0`` as many as spread the replicas evenly over the workers; one per
         group when the scene cannot be packed (a force that cannot be copied,
-        unless the scene says how to rebuild it over all copies, as the chiral term does;
-        or mirror-coupled pairs, which must be bit-reproducible)."""
+        unless the scene says how to rebuild it over all copies, as the chiral term does).
+        Mirror-coupled pairs pack along x (``pack_models(line=True)``), which keeps the
+        image pack the exact mirror of the original's."""
         from ..packing import group_replicas, packable
 
-        can = (getattr(self, "mirror", "off") == "off"
-               and packable(model.system, model.extra.get("rebuild_forces"))[0])
+        can = packable(model.system, model.extra.get("rebuild_forces"))[0]
         return group_replicas(replicas, self.pack, workers, platform, can)
 
     def replica_seed(self, r: int) -> int:
@@ -555,7 +556,8 @@ def _run_replica(scene_dict, group, out, platform, threads, progress) -> list[di
                              ctx=m.ctx, progress=progress)]
         pdir = m.out
     else:
-        pack = pack_models([m.model for m in members])
+        pack = pack_models([m.model for m in members],
+                           line=getattr(first, "mirror", "off") != "off")
         engine = Engine(pack.model, platform=platform, seed=first.seed, threads=threads,
                         integrator=first.integrator)
         pdir = os.path.join(out, "replicas", f"pack_r{group[0]:02d}-r{group[-1]:02d}")
