@@ -111,8 +111,11 @@ CASES = [
                                         "tether_separation_nm": 10.0}),
     # 0.87 of the lock-up turns: the crushing contact force beats the passage barrier and
     # the strands pass through each other; the run must stop saying so, never go on
+    # ramped there (the independent protocol, default since 2026-11-30, builds the braid
+    # at its catenation and so never drives the strands through each other on the way)
     Case("4 turns, near lock-up", "braid", {"turns": [0.0, 4.0], "turn_rate": 2e-4,
-                                            "tether_separation_nm": 10.0}, "stopped",
+                                            "tether_separation_nm": 10.0,
+                                            "protocol": "ramp"}, "stopped",
          "the strands passed through each other"),
     Case("6 turns, past lock-up", "braid", {"turns": [0.0, 6.0], "tether_separation_nm": 10.0},
          "refused", "turns=(0.0, 6.0) turns: |turns| must be <="),
