@@ -102,8 +102,8 @@ def test_room_temperature_asymmetry_across_seeds(tmp_path):
     from dnabraid import sweep
 
     spec = {"scene": "braid",
-            "fixed": {"length_nm": 150.0, "tether_separation_nm": 30.0,
-                      "turns": [-2.0, 0.0, 2.0], "steps": 150_000,
+            "fixed": {"length_nm": 150.0, "tether_separation_nm": 30.0, "force_pN": 2.0,
+                      "timestep_safety": 0.3, "turns": [-2.0, 0.0, 2.0], "steps": 150_000,
                       "equilibration_steps": 30_000, "frame_interval": 50_000,
                       "replicas": 1, "protocol": "ramp"},
             "grid": {"alpha": [0.0, 12.0], "seed": [1, 2, 3, 4, 5, 6]}}

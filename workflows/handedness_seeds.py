@@ -37,7 +37,8 @@ def main(argv=None) -> int:
     args = ap.parse_args(argv)
     n = args.turns
     spec = {"scene": "braid",
-            "fixed": {"length_nm": 150.0, "tether_separation_nm": 30.0, "turns": [-n, 0.0, n],
+            "fixed": {"length_nm": 150.0, "tether_separation_nm": 30.0, "force_pN": 2.0,
+                      "timestep_safety": 0.3, "turns": [-n, 0.0, n],
                       "steps": args.steps, "equilibration_steps": 30_000,
                       "frame_interval": 50_000, "replicas": 1},
             "grid": {"alpha": args.alpha, "seed": list(range(1, args.seeds + 1))}}

@@ -31,6 +31,8 @@ def run_pair(alpha: float, n: float, args) -> dict:
              "steps": args.steps, "equilibration_steps": args.steps // 4,
              "frame_interval": 10_000, "replicas": args.replicas, "seed": args.seed,
              "alpha": alpha, "workers": args.workers}
+    if args.safety:
+        fixed["timestep_safety"] = args.safety
     out = {}
     wall = 0.0
     for mode, turns in (("original", [n]), ("image", [-n])):
@@ -53,6 +55,9 @@ def main(argv=None) -> int:
     ap.add_argument("--length", type=float, default=150.0, help="strand length (nm)")
     ap.add_argument("--force", type=float, default=2.0, help="pulling force (pN)")
     ap.add_argument("--separation", type=float, default=30.0, help="tether separation (nm)")
+    ap.add_argument("--safety", type=float, default=0.0,
+                    help="timestep_safety (0: the braid's default, 0.6 since 2026-12-01; "
+                         "mirror_pairs.md of 2026-11-30 ran at 0.3)")
     ap.add_argument("--replicas", type=int, default=4)
     ap.add_argument("--steps", type=int, default=60_000)
     ap.add_argument("--seed", type=int, default=1)
