@@ -23,14 +23,14 @@ import numpy as np
 
 from .geometry.curves import catenation_number
 from .scenes import make_scene
+from .scenes.braid import LONG_BRAID
 
 TWO_PI = 2.0 * math.pi
 
-#: The braid the cross-checks run unless overridden: 2 x 200 nm at 2 pN, long enough for a
-#: developed two-ply at n = 2 (the braid scene's default before 2026-12-01, on which the
-#: tolerances of tests/test_handedness.py and tests/test_crosscheck.py were set; the
-#: thermal default is now a short braid at 20 pN, chosen for convergence, README).
-CROSSCHECK_BRAID = {"length_nm": 200.0, "force_pN": 2.0}
+#: The braid the cross-checks run unless overridden: the long braid (2 x 200 nm at 2 pN),
+#: a developed two-ply at n = 2, on which the tolerances of tests/test_handedness.py and
+#: tests/test_crosscheck.py were set.
+CROSSCHECK_BRAID = LONG_BRAID
 
 
 @dataclasses.dataclass(frozen=True)

@@ -39,6 +39,7 @@ import numpy as np
 
 from .engine import SimulationBlowUp
 from .scenes import SceneError, make_scene
+from .scenes.braid import LONG_BRAID
 
 log = logging.getLogger(__name__)
 
@@ -55,9 +56,8 @@ MAX_CATENATION_ERROR = 0.05
 #: the default braid's last bond at the bead within ~700 steps; 2e-4 tears 1 nm beads).
 MATRIX = {"length_nm": 100.0, "report_interval": 100, "replicas": 1, "workers": 1}
 #: Per scene, the defaults the matrix was set up and measured with where they have changed
-#: since: the braid's force and time step before 2026-12-01 (its thermal default is now a
-#: short braid at 20 pN, chosen for convergence; the extremes are about 2 pN braids).
-SCENE_BASE = {"braid": {"force_pN": 2.0, "timestep_safety": 0.3}}
+#: since: the long braid's force and time step (its length is the matrix's 100 nm).
+SCENE_BASE = {"braid": {k: LONG_BRAID[k] for k in ("force_pN", "timestep_safety")}}
 
 OUTCOMES = ("ok", "refused", "stopped", "error")
 

@@ -15,6 +15,7 @@ from dnabraid.analysis.geometry import bending_cosines
 from dnabraid.continuum.wlc import discrete_wlc_extension
 from dnabraid.engine import Engine, SimulationBlowUp
 from dnabraid.scenes import make_scene
+from dnabraid.scenes.braid import LONG_BRAID
 
 #: |simulation - theory| must be below Z_TOL standard errors of the mean ...
 Z_TOL = 4.0
@@ -192,10 +193,6 @@ def test_blow_up_names_step_and_term(tmp_path):
     assert exc.value.saved and os.path.exists(exc.value.saved)
 
 
-#: a braid long enough for a developed two-ply at 3 turns (the default before 2026-12-01)
-LONG = {"length_nm": 200.0, "force_pN": 2.0}
-
-
 @pytest.mark.parametrize("n", [-3.0, -1.0, 1.0, 2.5])
 def test_braid_start_built_at_its_catenation(n):
     """The independent protocol builds each braid at its turn value: the two-ply start has
@@ -203,7 +200,7 @@ def test_braid_start_built_at_its_catenation(n):
     by n turns."""
     from dnabraid.geometry.curves import catenation_number
 
-    s = make_scene("braid", {**LONG, "turns": [n], "start_spread": 0.0})
+    s = make_scene("braid", {**LONG_BRAID, "turns": [n], "start_spread": 0.0})
     m = s.build()
     p = s.start_positions(m, n)
     c = m.chains
@@ -224,7 +221,7 @@ def test_braid_replicas_start_overdispersed():
 
     from dnabraid.geometry.curves import catenation_number
 
-    s = make_scene("braid", {**LONG, "turns": [1.0]})
+    s = make_scene("braid", {**LONG_BRAID, "turns": [1.0]})
     m = s.build()
     heights = []
     for seed in range(64, 72):

@@ -26,10 +26,9 @@ import numpy as np
 
 from dnabraid.analysis.maxwell import torque_from_extension
 from dnabraid.scenes import make_scene
+from dnabraid.scenes.braid import LONG_BRAID
 
 HERE = pathlib.Path(__file__).resolve().parent
-#: the default braid before 2026-12-01, which this workflow's table was measured on
-OLD_DEFAULT = {"length_nm": 200.0, "timestep_safety": 0.3}
 
 
 def main(argv=None) -> int:
@@ -48,8 +47,8 @@ def main(argv=None) -> int:
     gs = np.empty_like(z)
     wall = 0.0
     for i, f in enumerate(F):
-        # the 2 x 200 nm braid of 2026-11-30 (the default before 2026-12-01)
-        sc = make_scene("braid", {**OLD_DEFAULT, "force_pN": float(f), "turns": list(n),
+        # the long braid (the default before 2026-12-01), which the table was measured on
+        sc = make_scene("braid", {**LONG_BRAID, "force_pN": float(f), "turns": list(n),
                                   "steps": args.steps,
                                   "equilibration_steps": args.steps // 4,
                                   "replicas": args.replicas, "seed": 3})

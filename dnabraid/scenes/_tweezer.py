@@ -41,6 +41,14 @@ UNITS = {"extension": "nm", "torque": "pN nm (torque the trap applies; > 0 holds
          "sem": "standard error of the mean, autocorrelation-corrected (Sokal window)"}
 
 
+#: Help of the ``pack`` key (tweezer scenes and the catenane).
+PACK_HELP = ("replicas packed into one OpenMM Context (one System of non-interacting copies, "
+             "dnabraid.packing; the chiral term is built over all copies, mirror pairs pack "
+             "along x). 2 x 60 nm braid: 1.8x faster at 2, 2.9x at 4, 4.2x at 8 "
+             "(workflows/results/benchmark_replicas_small.txt). 0 = replicas / workers, "
+             "1 = off")
+
+
 def _default_turns():
     return (-4.0, -3.0, -2.0, -1.0, 0.0, 1.0, 2.0, 3.0, 4.0)
 
@@ -96,13 +104,7 @@ class TweezerScene(DNAQuantities, Scene):
     target_sem_pN_nm: float = key(0.0, "pN nm", "target standard error of each point's trap "
                                   "torque; 0 = none")
     max_replicas: int = key(16, "", "budget: most replicas per point when a target is set")
-    pack: int = key(0, "", "replicas packed into one OpenMM Context (one System of "
-                    "non-interacting copies; the CPU platform's fixed cost per step is paid "
-                    "once: 2 x 60 nm braid 1.8x faster at 2, 2.9x at 4, 4.2x at 8, "
-                    "workflows/results/benchmark_replicas_small.txt; with the chiral term, rebuilt "
-                    "over all copies, 2.3x at 4; mirror pairs pack along x); 0 = replicas / "
-                    "workers, "
-                    "1 = off")
+    pack: int = key(0, "", PACK_HELP)
     integrator: str = key("euler", "", "'euler': Euler-Maruyama (OpenMM BrownianIntegrator); "
                           "'lm': Leimkuhler-Matthews, same cost per step, smaller time-step "
                           "bias (workflows/results/integrator_bias.md)")
@@ -278,16 +280,8 @@ class TweezerScene(DNAQuantities, Scene):
                 "stopped_by": stopped_by, "n_replicas": pt["n_replicas"]}
 
     def pack_groups(self, replicas, workers: int, platform: str, model) -> list[tuple]:
-        """Replicas grouped into packs (one OpenMM Context each): ``pack`` per group, or
-        with ``pack = 0`` as many as spread the replicas evenly over the workers; one per
-        group when the scene cannot be packed (a force that cannot be copied,
-        unless the scene says how to rebuild it over all copies, as the chiral term does).
-        Mirror-coupled pairs pack along x (``pack_models(line=True)``), which keeps the
-        image pack the exact mirror of the original's."""
-        from ..packing import group_replicas, packable
-
-        can = packable(model.system, model.extra.get("rebuild_forces"))[0]
-        return group_replicas(replicas, self.pack, workers, platform, can)
+        """Replicas grouped into packs (:func:`replica_groups`)."""
+        return replica_groups(self, replicas, workers, platform, model)
 
     def replica_seed(self, r: int) -> int:
         return self.seed * MAX_REPLICAS + r
@@ -357,10 +351,8 @@ class TweezerScene(DNAQuantities, Scene):
         stopped_by = "replicas"
         while True:
             # run replicas len(results) .. R-1 (all of them the first time)
-            groups = self.pack_groups(range(len(results), R), workers, platform, model)
-            nw = max(1, min(workers, len(groups))) if platform == "CPU" else 1
-            jobs = [(self.to_dict(), g, out, platform, threads if nw == 1 else 1)
-                    for g in groups]
+            groups, nw, jobs = replica_jobs(self, range(len(results), R), workers, platform,
+                                            threads, out, model)
             bar = progress_factory(sched.total_steps * (R - len(results))) \
                 if progress_factory else None
             try:
@@ -400,11 +392,7 @@ class TweezerScene(DNAQuantities, Scene):
                          "sampling allows or sampled too few independent configurations "
                          "(see convergence_reason per point); raise `steps` or `replicas`")
         n_part = model.system.getNumParticles()
-        packs = sorted({r["pack"] for r in results})
-        if any(len(g) > 1 for g in packs):
-            notes.append(f"replicas packed into {len(packs)} OpenMM Context(s) of "
-                         f"{', '.join(str(len(g)) for g in packs)} non-interacting copies "
-                         "(key `pack`; each replica keeps its own start, checks and files)")
+        notes += packing_notes(sorted({r["pack"] for r in results}))
         summary = rundir.Summary(
             scene=self.to_dict(), wall_time_s=wall, platform=platform,
             time_step_ps=dt_ns * 1e3, time_step_reason=model.timestep.reason,
@@ -516,6 +504,36 @@ def lockup_turns(length_nm: float, diameter_nm: float) -> float:
 
 
 # ------------------------------------------------------------------------------ replicas
+def replica_groups(scene, replicas, workers: int, platform: str, model) -> list[tuple]:
+    """Replicas grouped into packs (one OpenMM Context each): ``scene.pack`` per group, or
+    with ``pack = 0`` as many as spread the replicas evenly over the workers; one per group
+    when the scene cannot be packed (a force that cannot be copied, unless the model says
+    how to rebuild it over all copies, as the chiral term does). Mirror-coupled pairs pack
+    along x (``pack_models(line=True)``), which keeps the image pack the exact mirror of
+    the original's."""
+    from ..packing import group_replicas, packable
+
+    can = packable(model.system, model.extra.get("rebuild_forces"))[0]
+    return group_replicas(replicas, scene.pack, workers, platform, can)
+
+
+def replica_jobs(scene, replicas, workers: int, platform: str, threads, out: str, model):
+    """(groups, worker processes, jobs) for :func:`_run_jobs`: one job per pack."""
+    groups = replica_groups(scene, replicas, workers, platform, model)
+    nw = max(1, min(workers, len(groups))) if platform == "CPU" else 1
+    jobs = [(scene.to_dict(), g, out, platform, threads if nw == 1 else 1) for g in groups]
+    return groups, nw, jobs
+
+
+def packing_notes(groups) -> list[str]:
+    """The summary note saying how replicas were packed (none when each ran alone)."""
+    if not any(len(g) > 1 for g in groups):
+        return []
+    return [f"replicas packed into {len(groups)} OpenMM Context(s) of "
+            f"{', '.join(str(len(g)) for g in groups)} non-interacting copies (key `pack`; "
+            "each replica keeps its own start, checks and files)"]
+
+
 def _usable_cores() -> int:
     try:
         return len(os.sched_getaffinity(0))
@@ -533,9 +551,10 @@ def _run_replica(scene_dict, group, out, platform, threads, progress) -> list[di
     d = dict(scene_dict)
     name = d.pop("scene")
     base = make_scene(name, d)
-    members = []
+    members, scenes = [], []
     for r in group:
         scene = dataclasses.replace(base, seed=base.replica_seed(r))
+        scenes.append(scene)
         model = scene.build()
         rdir = os.path.join(out, "replicas", f"r{r:02d}")
         ctx = {"trap_parameter": scene.trap_parameter,
@@ -545,7 +564,7 @@ def _run_replica(scene_dict, group, out, platform, threads, progress) -> list[di
                "start_positions": (lambda sc, mo: lambda t: sc.start_positions(mo, t))(scene,
                                                                                         model)}
         members.append(Member(model, scene.observables(model), rdir, ctx, label=f"replica {r}"))
-    first = dataclasses.replace(base, seed=base.replica_seed(group[0]))
+    first = scenes[0]
     if len(group) == 1:
         m = members[0]
         engine = Engine(m.model, platform=platform, seed=first.seed, threads=threads,
@@ -554,7 +573,6 @@ def _run_replica(scene_dict, group, out, platform, threads, progress) -> list[di
         os.makedirs(m.out, exist_ok=True)
         dirs = [run_schedule(m.model, engine, first.schedule(), m.observables, m.out,
                              ctx=m.ctx, progress=progress)]
-        pdir = m.out
     else:
         pack = pack_models([m.model for m in members],
                            line=getattr(first, "mirror", "off") != "off")
@@ -566,7 +584,7 @@ def _run_replica(scene_dict, group, out, platform, threads, progress) -> list[di
             os.makedirs(m.out, exist_ok=True)
         dirs = run_packed(pack, engine, first.schedule(), members, pdir, progress=progress)
     return [{"dirs": ds, "integrator_seed": engine.seed, "resumed": resumed,
-             "pack": tuple(group), "pack_dir": pdir} for ds in dirs]
+             "pack": tuple(group)} for ds in dirs]
 
 
 def _worker(args):

@@ -27,6 +27,11 @@ from .base import SceneError, key
 MIRROR_MODES = ("off", "original", "image")
 #: largest bow of an overdispersed start's braid axis, as a fraction of the strand length
 MAX_START_BOW = 0.25
+#: The long braid: 2 x 200 nm at 2 pN and timestep_safety 0.3, the braid's defaults before
+#: 2026-12-01 (a developed two-ply up to n = +-3). The zero-temperature cross-checks, the
+#: extremes matrix and several workflows were set up and measured on it; the thermal
+#: default is now a short braid at 20 pN, chosen for convergence (README).
+LONG_BRAID = {"length_nm": 200.0, "force_pN": 2.0, "timestep_safety": 0.3}
 
 
 @dataclasses.dataclass(frozen=True)

@@ -70,9 +70,15 @@ from ..forces.reference_chiral import chiral_energy_forces, default_subdivisions
 from ..geometry.curves import crossing_angles, gauss_linking_number, writhe
 from ..geometry.twist import ring_twist
 from ..observables import Observable
-from ..packing import group_replicas, packable
 from ..protocols import TurnSchedule
-from ._tweezer import MAX_REPLICAS, _run_jobs, _usable_cores
+from ._tweezer import (
+    MAX_REPLICAS,
+    PACK_HELP,
+    _run_jobs,
+    _usable_cores,
+    packing_notes,
+    replica_jobs,
+)
 from .base import DNAQuantities, Scene, SceneError, key, resolve_salt_alpha
 
 __all__ = ["Catenane", "RingObservables", "ChiralEnergy", "hopf_start"]
@@ -295,9 +301,7 @@ class Catenane(DNAQuantities, Scene):
     seed: int = key(1, "", f"random seed (0 ... {MAX_SEED // MAX_REPLICAS})")
     replicas: int = key(2, "", "independent replicas (their scatter is the error bar)")
     workers: int = key(0, "", "processes running replicas at once; 0 = one per usable core")
-    pack: int = key(0, "", "replicas packed into one OpenMM Context (non-interacting copies, "
-                    "dnabraid.packing; the chiral term is built over all copies); 0 = "
-                    "replicas / workers, 1 = off")
+    pack: int = key(0, "", PACK_HELP)
     timestep_safety: float = key(0.3, "", "time step = safety x 2 / (mobility x largest "
                                  "stiffness)")
     integrator: str = key("lm", "", "'lm' (Leimkuhler-Matthews: per-joint twist variance "
@@ -524,10 +528,7 @@ class Catenane(DNAQuantities, Scene):
         obs = self.observables(model)
         workers = self.workers or _usable_cores()
         R = self.replicas
-        groups = group_replicas(range(R), self.pack, workers, platform,
-                                packable(model.system, model.extra.get("rebuild_forces"))[0])
-        nw = max(1, min(workers, len(groups))) if platform == "CPU" else 1
-        jobs = [(self.to_dict(), g, out, platform, threads if nw == 1 else 1) for g in groups]
+        groups, nw, jobs = replica_jobs(self, range(R), workers, platform, threads, out, model)
         bar = progress_factory(sched.total_steps * R) if progress_factory else None
         try:
             results = [x for res in _run_jobs(jobs, nw, bar) for x in res]
@@ -552,10 +553,7 @@ class Catenane(DNAQuantities, Scene):
         if not pt["converged"]:
             notes.append("NOT CONVERGED: " + pt["convergence_reason"] + "; raise `steps` or "
                          "`replicas`")
-        if any(len(g) > 1 for g in groups):
-            notes.append(f"replicas packed into {len(groups)} OpenMM Context(s) of "
-                         f"{', '.join(str(len(g)) for g in groups)} non-interacting copies "
-                         "(key `pack`)")
+        notes += packing_notes(groups)
         n_part = model.system.getNumParticles()
         summary = rundir.Summary(
             scene=self.to_dict(), wall_time_s=wall, platform=platform,
