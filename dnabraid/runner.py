@@ -27,6 +27,7 @@ import numpy as np
 
 from . import reporters, rundir
 from .engine import Engine
+from .moves import apply_moves
 from .protocols import Segment
 
 log = logging.getLogger(__name__)
@@ -166,6 +167,21 @@ def _run_members(engine, schedule, members, ckdir, chk_path, *, progress=None,
                 shutil.rmtree(p)  # an interrupted point: run it again from its start
         ctxs = [dict(m.ctx, trap_turns=seg.start_turns) for m in members]
         split = _splitter(members)
+        # Metropolis rigid-body moves (dnabraid.moves), where a scene asks for them: after
+        # every report interval of equilibration and sampling, on their own random stream
+        movers = [m.model.extra.get("moves") for m in members]
+        has_moves = any(mv is not None for mv in movers)
+        for mv in movers:
+            if mv is not None:
+                mv.restart(seg.index)
+
+        def advance(n, fail_dir):
+            pos = engine.advance(n, fail_dir)
+            if not has_moves:
+                return pos
+            apply_moves(engine, members)
+            return engine.positions()
+
         for m, p in zip(members, split(engine.positions())):
             for ob in m.observables:
                 ob.reset(seg.start_turns, p)
@@ -206,16 +222,20 @@ def _run_members(engine, schedule, members, ckdir, chk_path, *, progress=None,
             left = seg.equilibration_steps
             while left > 0:
                 n = min(left, ri)
-                pos = engine.advance(n, fail_dir)
+                pos = advance(n, fail_dir)
                 observe(pos, False)
                 progress(n * len(members))
                 left -= n
             # 3. sample
             for i in range(seg.sample_steps // ri):
-                pos = engine.advance(ri, fail_dir)
+                pos = advance(ri, fail_dir)
                 progress(ri * len(members))
                 observe(pos, (i + 1) % every == 0, ws)
         engine.save_checkpoint(chk_path(seg))
+        for p, mv in zip(pdirs, movers):
+            if mv is not None:
+                rundir.atomic_write_text(os.path.join(p, "moves.json"),
+                                         json.dumps(mv.summary()) + "\n")
         for p, w in zip(pdirs, ws):
             rundir.atomic_write_text(os.path.join(p, "done.json"), json.dumps(
                 {"turns": seg.turns, "step": engine.step, "frames": w.n_frames}) + "\n")

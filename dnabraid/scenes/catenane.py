@@ -69,6 +69,7 @@ from ..forces.chiral import chiral_force, default_exclusion
 from ..forces.reference_chiral import chiral_energy_forces, default_subdivisions
 from ..geometry.curves import crossing_angles, gauss_linking_number, writhe
 from ..geometry.twist import ring_twist
+from ..moves import RigidMoves
 from ..observables import Observable
 from ..protocols import TurnSchedule
 from ._tweezer import (
@@ -256,6 +257,33 @@ def _between(means) -> dict:
             "replica_means": [float(x) for x in m]}
 
 
+def _moves_summary(dirs) -> dict | None:
+    """Rigid-move counts summed over the replicas (their ``moves.json``); None without."""
+    import json
+
+    tot: dict = {}
+    for d in dirs:
+        path = os.path.join(d, "moves.json")
+        if not os.path.exists(path):
+            continue
+        with open(path) as fh:
+            m = json.load(fh)
+        for k, v in m.items():
+            if isinstance(v, dict):
+                t = tot.setdefault(k, {"attempted": 0, "refused_by_constraint": 0,
+                                       "accepted": 0})
+                for c in t:
+                    t[c] += int(v[c])
+            else:
+                tot[k] = v
+    if not tot:
+        return None
+    for v in tot.values():
+        if isinstance(v, dict):
+            v["acceptance"] = v["accepted"] / v["attempted"] if v["attempted"] else None
+    return tot
+
+
 @dataclasses.dataclass(frozen=True)
 class Catenane(DNAQuantities, Scene):
     """Two linked DNA minicircles (or one ring) at room temperature; keys in nm, pN, K."""
@@ -273,9 +301,19 @@ class Catenane(DNAQuantities, Scene):
     rings: int = key(2, "", "2: two linked rings; 1: a single ring (twist checks)")
     link: int = key(1, "", "sign of the rings' Gauss linking number Lk_12 (+1 or -1; for "
                     "apolar DNA both orientations are the same Hopf link)")
-    start: str = key("apart", "", "'apart': each ring through the other's centre (strands R "
-                     "apart); 'contact': ring 2's strand 1.3 diameters from ring 1's (the "
-                     "rings' relative position relaxes slowly: compare both starts)")
+    start: str = key("mixed", "", "'apart': each ring through the other's centre (strands R "
+                     "apart); 'contact': ring 2's strand 1.3 diameters from ring 1's; 'mixed': "
+                     "even replicas apart, odd ones in contact (starts far apart for the "
+                     "between-replica convergence check)")
+    rigid_moves: int = key(10, "", "Metropolis rigid-body moves of the rings (a relative shift "
+                           "and a turn of one ring about its centre, dnabraid.moves) after every "
+                           "report interval; 0 = Brownian dynamics alone, whose rings take "
+                           "~6e6 steps to slide through each other")
+    move_shift_nm: float = key(8.0, "nm", "radius of the rings' relative shift (a ball)")
+    move_angle_rad: float = key(0.3, "rad", "largest angle of a ring's turn about its centre")
+    arc_angle_rad: float = key(0.5, "rad", "largest crankshaft angle (an arc of up to half a "
+                               "ring turned about the line through its ends; 0 = none): the "
+                               "rings' shapes and writhes, ~1e5 Brownian steps otherwise")
     delta_lk: int = key(0, "turns", "each ring's own linking number Delta Lk_i = Tw_i + Wr_i "
                         "(an integer: the model has no intrinsic helical twist, so a closed "
                         "ribbon's Lk is a whole number of turns)")
@@ -327,6 +365,14 @@ class Catenane(DNAQuantities, Scene):
     def replica_seed(self, r: int) -> int:
         return self.seed * MAX_REPLICAS + r
 
+    @property
+    def start_of_replica(self) -> str:
+        """'apart' or 'contact': with ``start = 'mixed'``, by the parity of the replica index
+        (a replica's scene carries seed = base seed x MAX_REPLICAS + index)."""
+        if self.start != "mixed":
+            return self.start
+        return "contact" if self.seed % MAX_REPLICAS % 2 else "apart"
+
     # -- keys ----------------------------------------------------------------------------
     @classmethod
     def resolve(cls, values: dict) -> dict:
@@ -348,7 +394,15 @@ class Catenane(DNAQuantities, Scene):
              "compares the two halves of a ring)")
         need(self.rings in (1, 2), "rings", "must be 1 or 2")
         need(self.link in (1, -1), "link", "must be +1 or -1 (a Hopf link)")
-        need(self.start in ("apart", "contact"), "start", "allowed: 'apart', 'contact'")
+        need(self.start in ("apart", "contact", "mixed"), "start",
+             "allowed: 'apart', 'contact', 'mixed'")
+        need(self.rigid_moves >= 0, "rigid_moves", "must be >= 0 (0 = none)")
+        need(self.move_shift_nm >= 0, "move_shift_nm", "must be >= 0")
+        need(0 <= self.move_angle_rad <= math.pi, "move_angle_rad", "must be in [0, pi]")
+        need(0 <= self.arc_angle_rad <= math.pi, "arc_angle_rad", "must be in [0, pi]")
+        need(self.rigid_moves == 0 or self.move_shift_nm > 0 or self.move_angle_rad > 0
+             or self.arc_angle_rad > 0, "rigid_moves",
+             "needs move_shift_nm, move_angle_rad or arc_angle_rad > 0")
         need(self.persistence_nm >= self.bead_spacing_nm, "persistence_nm",
              "must be >= bead_spacing_nm")
         need(self.bead_spacing_nm <= self.twist_persistence_nm <= 1000.0,
@@ -398,7 +452,7 @@ class Catenane(DNAQuantities, Scene):
     def build(self) -> Model:
         kit = ChainKit(self.dna())
         d = kit.dna
-        gap = 1.3 * d.diameter_nm if self.start == "contact" else None
+        gap = 1.3 * d.diameter_nm if self.start_of_replica == "contact" else None
         starts = hopf_start(self.n_beads, self.bead_spacing_nm, self.rings, self.link, gap)
         rings = [kit.add_chain(p, "AB"[k], closed=True, fixed_first=False)
                  for k, p in enumerate(starts)]
@@ -424,6 +478,29 @@ class Catenane(DNAQuantities, Scene):
         kit.bound("stretch", "bend", "wca", "chiral", "twist_on_dna")
         kit.bound("frame", "twist")
         kit.sides = np.concatenate(sides)
+        if self.rigid_moves and (self.rings == 2 or self.arc_angle_rad > 0):
+            ring_idx = [np.asarray(r, int) for r in rings]
+            side_idx = [np.asarray(sd, int) for sd in sides]
+            two = self.rings == 2
+
+            def same_topology(pos, kind, ri=ring_idx, si=side_idx, lk=self.delta_lk,
+                              link=self.link):
+                # no move may pass DNA through DNA or a joint's twist through pi: each ring's
+                # Tw + Wr and the rings' Gauss linking number stay what they were
+                if two and abs(gauss_linking_number(pos[ri[0]], pos[ri[1]]) - link) > 0.5:
+                    return False
+                if kind != "arc":  # a rigid motion keeps each ring's Tw and Wr
+                    return True
+                return all(abs(float(np.sum(ring_twist(pos[r], pos[sd], per_joint=True)))
+                               / TWO_PI + writhe(pos[r]) - lk) < 0.5
+                           for r, sd in zip(ri, si))
+
+            kit.extra["moves"] = RigidMoves(
+                [np.concatenate([r, sd]) for r, sd in zip(ring_idx, side_idx)], d.kT,
+                shift_nm=self.move_shift_nm if two else 0.0,
+                angle_rad=self.move_angle_rad if two else 0.0, pivots=ring_idx,
+                allowed=same_topology, moves_per_call=self.rigid_moves, seed=self.seed,
+                rings=list(zip(ring_idx, side_idx)), arc_angle_rad=self.arc_angle_rad)
         kit.extra["rings"] = [np.asarray(r, int) for r in rings]
         kit.extra["ring_sides"] = [np.asarray(s, int) for s in sides]
         g = self.twist_persistence_nm * d.kT / self.bead_spacing_nm
@@ -536,6 +613,7 @@ class Catenane(DNAQuantities, Scene):
             if bar:
                 bar.close()
         pt = self.point_summary([reporters.read_point(r["dirs"][0]) for r in results])
+        pt["rigid_moves"] = _moves_summary([r["dirs"][0] for r in results])
         wall = time.perf_counter() - t0
         resumed = any(r["resumed"] for r in results)
         total = sched.total_steps * R
