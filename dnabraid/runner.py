@@ -175,7 +175,7 @@ def _run_members(engine, schedule, members, ckdir, chk_path, *, progress=None,
             if mv is not None:
                 mv.restart(seg.index)
 
-        def advance(n, fail_dir):
+        def advance(n, fail_dir, has_moves=has_moves):
             pos = engine.advance(n, fail_dir)
             if not has_moves:
                 return pos

@@ -68,15 +68,15 @@ def test_shift_samples_the_gaussian_centroid_exactly():
 
 
 def test_turn_samples_the_langevin_orientation_exactly():
-    kT, l, h = 4.1, 1.0, 3.0
+    kT, half, h = 4.1, 1.0, 3.0
     field = np.array([0.0, 0.0, h])
-    pos = np.array([[l, 0.0, 0.0], [-l, 0.0, 0.0]])
+    pos = np.array([[half, 0.0, 0.0], [-half, 0.0, 0.0]])
     mv = RigidMoves([np.arange(2)], kT, shift_nm=0.0, angle_rad=0.8, moves_per_call=1,
                     seed=5)
     traj = _drive(mv, pos, lambda p: -field @ (p[0] - p[1]), 60000)[5000:]
     u = traj[:, 0] - traj[:, 1]
     cos = u[:, 2] / np.linalg.norm(u, axis=1)
-    x = 2 * h * l / kT
+    x = 2 * h * half / kT
     exact = 1 / math.tanh(x) - 1 / x
     assert abs(cos.mean() - exact) < 4 * _batch_sem(cos), (cos.mean(), exact)
     # the rotation is about the centroid: it stays at the origin
