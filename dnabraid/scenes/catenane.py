@@ -36,14 +36,21 @@ twists, dTw_half = (sum_{j < n/2} omega_j - sum_{j >= n/2} omega_j) / 2 pi, has
 <dTw_half^2> = n b / (4 pi^2 C) = L / (4 pi^2 C) exactly (n even). That is the ring's
 twist-persistence check (``twist_half_variance`` in the summary, with its theory value).
 
-Run length and time scales (measured, 144-nm rings, b = 3 nm, dt = 6 ps). The ring's
-writhe (tied to its total twist) decorrelates in ~5000 steps (the frames must turn as a
-whole; twist diffuses along the ring); the rings slide through each other only by rigid
-rotation (~40 ns, ~7000 steps); contacts between the rings are rare without buckling (none
-in 8 x 48000 steps of 144-nm rings at Delta Lk = +-1). The default run, 2 replicas x
-(20000 + 100000) steps, takes a few minutes on 2 cores (~700 steps/s per replica) and
-yields ~20 independent writhe samples per replica: enough for the topology checks and
-twist fluctuations, flagged NOT CONVERGED for <Wr>; workflows/catenane.py runs longer.
+Run length and time scales (144-nm rings, b = 3 nm, zeta = 25 pN ns/nm per bead; measured
+2026-12-01). Brownian dynamics alone is slow in two ways. (1) The rings' relative position:
+the rings slide through each other only by moving as wholes, and a ring diffuses with
+D = kT / (zeta_l L) = 3.4e-3 nm^2/ns, so crossing its radius (23 nm) takes ~39 us, ~3e6
+steps of 12 ps; from a start in contact the rings stayed in contact (44-48 % of samples)
+and from the start apart they touched in 0-2 % after 2e5 steps. (2) The rings' shapes and
+writhes (slowest bending modes, ~1e4-1e5 steps; the 2026-12-01 alpha sweep had writhe
+R-hat 1.4). Hence the Metropolis moves after every report interval (``rigid_moves``, cycled:
+a relative shift of the rings, a turn of one ring about its centre, a crankshaft turn of an
+arc of up to half a ring; :mod:`dnabraid.moves`), which keep the Boltzmann distribution
+exactly and never change Lk_12 or Lk_i (a move that would is refused). With 10 moves per
+100 steps the contact length's bulk ESS over 4 replicas x 8e4 steps rose from 11 to
+~2000 (workflows/results/benchmark_moves.txt); the single ring's <dTw_half^2> stays exact
+(tests/test_catenane.py). ``rigid_moves = 0`` is plain Brownian dynamics (whose time
+correlations are physical; the moves' are not).
 """
 
 from __future__ import annotations
@@ -305,10 +312,11 @@ class Catenane(DNAQuantities, Scene):
                      "apart); 'contact': ring 2's strand 1.3 diameters from ring 1's; 'mixed': "
                      "even replicas apart, odd ones in contact (starts far apart for the "
                      "between-replica convergence check)")
-    rigid_moves: int = key(10, "", "Metropolis rigid-body moves of the rings (a relative shift "
-                           "and a turn of one ring about its centre, dnabraid.moves) after every "
-                           "report interval; 0 = Brownian dynamics alone, whose rings take "
-                           "~6e6 steps to slide through each other")
+    rigid_moves: int = key(10, "", "Metropolis moves after every report interval, cycling a "
+                           "relative shift of the rings, a turn of one ring about its centre "
+                           "and a crankshaft turn of an arc (dnabraid.moves); 0 = Brownian "
+                           "dynamics alone, whose rings take ~3e6 steps to slide through each "
+                           "other")
     move_shift_nm: float = key(8.0, "nm", "radius of the rings' relative shift (a ball)")
     move_angle_rad: float = key(0.3, "rad", "largest angle of a ring's turn about its centre")
     arc_angle_rad: float = key(0.5, "rad", "largest crankshaft angle (an arc of up to half a "
