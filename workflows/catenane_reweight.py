@@ -52,6 +52,14 @@ POINTS = {
     "a0_dlk+1": {"alpha": 0.0, "delta_lk": 1, "link": -1},
     "a+6_dlk-1": {"alpha": 6.0, "delta_lk": -1, "link": 1},
 }
+#: the rings: 424 bp at 1 M (the scene's default, Delta/L = 0.02) with every run; 720 bp at
+#: 150 mM (Delta = 4.9 nm, Delta/L = 0.02 too; 50 beads of 4.896 nm) with the alpha = 0,
+#: Delta Lk = -1 ensemble alone
+SYSTEMS = {
+    "424bp": ({}, tuple(POINTS), True),
+    "720bp": ({"length_nm": 244.8, "salt_mM": 150.0, "bead_spacing_nm": 4.896},
+              ("a0_dlk-1",), False),
+}
 
 
 def common_keys(args) -> dict:
@@ -63,13 +71,16 @@ def common_keys(args) -> dict:
 
 def run_all(args, log) -> dict:
     out = {}
-    c = common_keys(args)
-    for tag, k in POINTS.items():
-        keys = {**c, **k}
+    geometry, tags, with_ring = SYSTEMS[args.system]
+    c = {**common_keys(args), **geometry}
+    for tag in tags:
+        keys = {**c, **POINTS[tag]}
         if tag.startswith("a+6"):
             keys["steps"] = args.direct_steps
         out[tag] = run_point(tag, keys, args.out, log)
         print(f"{tag}: done ({out[tag]['wall_time_s']:.0f} s)", flush=True)
+    if not with_ring:
+        return out
     ring = {**c, "rings": 1, "steps": args.ring_steps, "replicas": 4, "start": "apart"}
     out["ring"] = run_point("ring", ring, args.out, log)
     print(f"ring: done ({out['ring']['wall_time_s']:.0f} s)", flush=True)
@@ -85,11 +96,16 @@ def main(argv=None) -> int:
     ap.add_argument("--replicas", type=int, default=8)
     ap.add_argument("--safety", type=float, default=0.6)
     ap.add_argument("--frame-interval", type=int, default=1000)
-    ap.add_argument("--out", default="runs/catenane_rw")
+    ap.add_argument("--system", default="424bp", choices=sorted(SYSTEMS))
+    ap.add_argument("--out", default=None, help="default runs/catenane_rw[_720bp]")
     ap.add_argument("--runs-only", action="store_true")
     ap.add_argument("--stride", type=int, default=2, help="use every stride-th frame")
-    ap.add_argument("--table", default=str(HERE / "results" / "catenane_reweight.md"))
+    ap.add_argument("--table", default=None,
+                    help="default workflows/results/catenane_reweight[_720bp].md")
     args = ap.parse_args(argv)
+    suffix = "" if args.system == "424bp" else f"_{args.system}"
+    args.out = args.out or f"runs/catenane_rw{suffix}"
+    args.table = args.table or str(HERE / "results" / f"catenane_reweight{suffix}.md")
     os.makedirs(args.out, exist_ok=True)
     t0 = time.perf_counter()
     with open(os.path.join(args.out, "reports.md"), "a") as log:
@@ -161,42 +177,51 @@ def write_report(runs: dict, args, wall: float) -> None:
     from dnabraid.analysis.reweight import ReplicaReweighting
 
     grid = np.round(np.arange(-10.0, 10.0001, 0.5), 6)
+    tags = [t for t in POINTS if t in runs]
+    mirror, has_direct = "a0_dlk+1" in runs, "a+6_dlk-1" in runs
     scene = {t: make_scene("catenane", {k: v for k, v in runs[t]["scene"].items()
-                                        if k != "scene"}) for t in POINTS}
+                                        if k != "scene"}) for t in tags}
     kT = scene["a0_dlk-1"].kT
     t0 = time.perf_counter()
-    frames = {t: replica_frames(runs[t]["_out"], scene[t], args.stride) for t in POINTS}
+    frames = {t: replica_frames(runs[t]["_out"], scene[t], args.stride) for t in tags}
     t_frames = time.perf_counter() - t0
     rw = {t: ReplicaReweighting(frames[t], float(runs[t]["scene"]["alpha"]), kT)
-          for t in POINTS}
+          for t in tags}
     cols = {"eta": ("eta*c", "c"), "contact": ("incontact", None), "wr": ("wr", None),
             "c": ("c", None)}
     curves = {}
-    for t in ("a0_dlk-1", "a0_dlk+1"):
+    for t in [t for t in ("a0_dlk-1", "a0_dlk+1") if t in runs]:
         curves[t] = {k: [rw[t].mean(a, *v) for a in grid] for k, v in cols.items()}
         curves[t]["ess"] = [rw[t].ess(a) for a in grid]
     root_m, root_se = rw["a0_dlk-1"].root(grid, "eta*c", "c")
-    root_p, root_p_se = rw["a0_dlk+1"].root(grid, "eta*c", "c")
+    root_p, root_p_se = (rw["a0_dlk+1"].root(grid, "eta*c", "c") if mirror
+                         else (math.nan, math.nan))
     # direct alpha = +6 run against the reweighted alpha = 0 ensemble
-    direct = {k: rw["a+6_dlk-1"].mean(6.0, *v) for k, v in cols.items()}
+    direct = ({k: rw["a+6_dlk-1"].mean(6.0, *v) for k, v in cols.items()} if has_direct
+              else None)
     predicted = {k: rw["a0_dlk-1"].mean(6.0, *v) for k, v in cols.items()}
     verdicts = {t: {c: _verdict(frames[t], c) for c in ("wr1", "wr2", "c", "W")}
-                for t in POINTS}
-    ring = runs["ring"]["points"][0]
+                for t in tags}
+    ring = runs["ring"]["points"][0] if "ring" in runs else None
     sc = scene["a0_dlk-1"]
     B = sc.persistence_nm * kT
     L = sc.length_nm
     res = {"grid_pN": grid.tolist(), "kT_pN_nm": kT, "B_pN_nm2": B, "L_nm": L,
+           "system": args.system, "salt_mM": sc.salt_mM,
+           "diameter_nm": sc.effective_diameter_nm,
            "curves": {t: {k: [list(x) if isinstance(x, tuple) else x for x in v]
                           for k, v in c.items()} for t, c in curves.items()},
            "alpha_star_pN": {"dlk-1": [root_m, root_se], "dlk+1_mirrored": [-root_p,
                                                                               root_p_se]},
            "direct_alpha6": direct, "reweighted_alpha6": predicted, "verdicts": verdicts,
-           "ring_twist_half_variance": ring["twist_half_variance_1"],
-           "ring_twist_half_variance_theory": ring["twist_half_variance_theory"],
-           "rigid_moves": {t: runs[t]["points"][0].get("rigid_moves") for t in POINTS},
+           "ring_twist_half_variance": ring and ring["twist_half_variance_1"],
+           "ring_twist_half_variance_theory": ring and ring["twist_half_variance_theory"],
+           "rigid_moves": {t: runs[t]["points"][0].get("rigid_moves") for t in tags},
            "wall_s": {t: runs[t]["wall_time_s"] for t in runs}, "frames_s": t_frames,
-           "n_frames": {t: int(sum(len(r["W"]) for r in frames[t])) for t in POINTS}}
+           "n_frames": {t: int(sum(len(r["W"]) for r in frames[t])) for t in tags},
+           "writhe_bimodality": {t: _bimodality(np.concatenate([r["wr1"] for r in frames[t]]
+                                                               + [r["wr2"] for r in frames[t]]))
+                                 for t in tags}}
     base = os.path.splitext(args.table)[0]
     with open(base + ".json", "w") as fh:
         json.dump(res, fh, indent=1, default=float)
@@ -210,14 +235,29 @@ def _f(x, p=3):
     return f"{m:+.{p}f} +- {s:.{p}f}" if np.isfinite(m) else "-"
 
 
+def _bimodality(x) -> dict:
+    """Mean, sd, skewness and Sarle's bimodality coefficient (skew^2 + 1) / kurtosis of the
+    pooled writhes (> 5/9 hints at two modes: a buckled and an unbuckled ring)."""
+    x = np.asarray(x, float)
+    d = x - x.mean()
+    m2 = float(np.mean(d * d))
+    skew = float(np.mean(d**3) / m2**1.5)
+    kurt = float(np.mean(d**4) / m2**2)
+    return {"mean": float(x.mean()), "sd": math.sqrt(m2), "skew": skew,
+            "bc": (skew * skew + 1.0) / kurt}
+
+
 def _write_md(res, args, wall, path) -> None:
     g = np.asarray(res["grid_pN"])
-    cm, cp = res["curves"]["a0_dlk-1"], res["curves"]["a0_dlk+1"]
+    cm = res["curves"]["a0_dlk-1"]
+    cp = res["curves"].get("a0_dlk+1")
     idx = {a: int(np.argmin(abs(g - a))) for a in (-8, -6, -4, -2, -1, 0, 1, 2, 4, 6, 8)}
     n0 = res["n_frames"]["a0_dlk-1"]
     L, B = res["L_nm"], res["B_pN_nm2"]
     lines = [f"# catenane: handedness by reweighting in alpha, {time.strftime('%Y-%m-%d %H:%M')}",
-             "", "Two linked 144-nm rings (424 bp) at 1 M NaCl (Delta/L = 0.02), C = 100 nm, "
+             "", f"Two linked {L:g}-nm rings ({L / 0.34:.0f} bp) at {res['salt_mM']:g} mM NaCl "
+             f"(Delta = {res['diameter_nm']:.2f} nm, Delta/L = {res['diameter_nm'] / L:.3f}), "
+             "A = 50 nm, C = 100 nm, "
              f"Brownian dynamics (Leimkuhler-Matthews, safety {args.safety}) with Metropolis "
              "rigid-body and crankshaft moves (`dnabraid.moves`), "
              f"{args.replicas} replicas per run (half started apart, half in contact), "
@@ -241,42 +281,58 @@ def _write_md(res, args, wall, path) -> None:
                 f"{k} {m[k]['acceptance']:.2f} ({m[k]['attempted']} tried, "
                 f"{m[k]['refused_by_constraint']} refused by the topology check)"
                 for k in ("shift", "turn", "arc") if k in m))
-    lines += ["", "## Reweighted from alpha = 0 (Delta Lk_i = -1, Lk_12 = +1) and its mirror "
-              "image (Delta Lk_i = +1, Lk_12 = -1, read at -alpha)", "",
+    lines += ["", "Writhe distribution per ring, both rings pooled (buckling shows as two modes, "
+              "Sarle's BC > 5/9):", ""]
+    for t, b in res["writhe_bimodality"].items():
+        lines.append(f"- {t}: <Wr> {b['mean']:+.3f}, sd {b['sd']:.3f}, skew {b['skew']:+.2f}, "
+                     f"BC {b['bc']:.3f}")
+    title = ("## Reweighted from alpha = 0 (Delta Lk_i = -1, Lk_12 = +1)"
+             + (" and its mirror image (Delta Lk_i = +1, Lk_12 = -1, read at -alpha)"
+                if cp else ""))
+    lines += ["", title, "",
               "| alpha (pN) | alpha L^2/B | <eta>_contact (rad) | mirror: -<eta>(-alpha) | "
               "in contact | <Wr> per ring | mirror: -<Wr>(-alpha) | symmetry z (Wr) | "
               "weights' ESS / frames |", "|---|---|---|---|---|---|---|---|---|"]
     for a, i in idx.items():
-        j = int(np.argmin(abs(g + a)))
-        eta, etam = cm["eta"][i], cp["eta"][j]
-        wr, wrm = cm["wr"][i], cp["wr"][j]
-        z = (wr[0] + wrm[0]) / math.hypot(wr[1], wrm[1])
-        lines.append(f"| {a:+g} | {a * L * L / B:+.0f} | {_f(eta)} | {_f((-etam[0], etam[1]))} "
-                     f"| {_f(cm['contact'][i], 2)} | {_f(wr)} | {_f((-wrm[0], wrm[1]))} | "
-                     f"{z:+.2f} | {cm['ess'][i] / n0:.2f} |")
+        eta, wr = cm["eta"][i], cm["wr"][i]
+        if cp:
+            j = int(np.argmin(abs(g + a)))
+            etam, wrm = cp["eta"][j], cp["wr"][j]
+            z = (wr[0] + wrm[0]) / math.hypot(wr[1], wrm[1])
+            mir = (f"{_f((-etam[0], etam[1]))}", f"{_f((-wrm[0], wrm[1]))}", f"{z:+.2f}")
+        else:
+            mir = ("-", "-", "-")
+        lines.append(f"| {a:+g} | {a * L * L / B:+.0f} | {_f(eta)} | {mir[0]} "
+                     f"| {_f(cm['contact'][i], 2)} | {_f(wr)} | {mir[1]} | {mir[2]} | "
+                     f"{cm['ess'][i] / n0:.2f} |")
     am, ap = res["alpha_star_pN"]["dlk-1"], res["alpha_star_pN"]["dlk+1_mirrored"]
     lines += ["", "## Where the link's handedness switches (<eta>_contact = 0)", "",
               f"- from the Delta Lk = -1 ensemble: alpha* = {am[0]:+.2f} +- {am[1]:.2f} pN "
-              f"({am[0] * L * L / B:+.0f} +- {am[1] * L * L / B:.0f} B/L^2)",
-              f"- from its mirror image (Delta Lk = +1, sign reversed): alpha* = "
-              f"{ap[0]:+.2f} +- {ap[1]:.2f} pN"]
-    if np.isfinite(am[0]) and np.isfinite(ap[0]):
+              f"({am[0] * L * L / B:+.0f} +- {am[1] * L * L / B:.0f} B/L^2)"]
+    if cp:
+        lines.append(f"- from its mirror image (Delta Lk = +1, sign reversed): alpha* = "
+                     f"{ap[0]:+.2f} +- {ap[1]:.2f} pN")
+    if cp and np.isfinite(am[1]) and np.isfinite(ap[1]) and am[1] > 0 and ap[1] > 0:
         w1, w2 = 1 / am[1] ** 2, 1 / ap[1] ** 2
         comb = (am[0] * w1 + ap[0] * w2) / (w1 + w2)
         lines += [f"- the two agree within {abs(am[0] - ap[0]) / math.hypot(am[1], ap[1]):.2f}"
-                  f" SE; combined alpha* = {comb:+.2f} +- {1 / math.sqrt(w1 + w2):.2f} pN"]
+                  f" SE; combined alpha* = {comb:+.2f} +- {1 / math.sqrt(w1 + w2):.2f} pN "
+                  f"({comb * L * L / B:+.0f} B/L^2)"]
     d, p = res["direct_alpha6"], res["reweighted_alpha6"]
-    lines += ["", "## Direct run at alpha = +6 pN against the reweighted alpha = 0 ensemble", "",
-              "| observable | direct | reweighted from alpha = 0 | z |", "|---|---|---|---|"]
-    for k, name in (("eta", "<eta>_contact (rad)"), ("contact", "in contact"),
-                    ("wr", "<Wr> per ring"), ("c", "contact length (nm)")):
-        z = (d[k][0] - p[k][0]) / math.hypot(d[k][1], p[k][1])
-        lines.append(f"| {name} | {_f(d[k])} | {_f(p[k])} | {z:+.2f} |")
+    if d:
+        lines += ["", "## Direct run at alpha = +6 pN against the reweighted alpha = 0 "
+                  "ensemble", "", "| observable | direct | reweighted from alpha = 0 | z |",
+                  "|---|---|---|---|"]
+        for k, name in (("eta", "<eta>_contact (rad)"), ("contact", "in contact"),
+                        ("wr", "<Wr> per ring"), ("c", "contact length (nm)")):
+            z = (d[k][0] - p[k][0]) / math.hypot(d[k][1], p[k][1])
+            lines.append(f"| {name} | {_f(d[k])} | {_f(p[k])} | {z:+.2f} |")
     r = res["ring_twist_half_variance"]
-    lines += ["", f"Single 144-nm ring at the same step and moves: <dTw_half^2> = "
-              f"{r['mean']:.4f} +- {r['sem']:.4f} turns^2 against L/(4 pi^2 C) = "
-              f"{res['ring_twist_half_variance_theory']:.4f}.", "",
-              "Wall time (s): " + ", ".join(f"{t} {w:.0f}" for t, w in res["wall_s"].items())
+    if r:
+        lines += ["", f"Single {L:g}-nm ring at the same step and moves: <dTw_half^2> = "
+                  f"{r['mean']:.4f} +- {r['sem']:.4f} turns^2 against L/(4 pi^2 C) = "
+                  f"{res['ring_twist_half_variance_theory']:.4f}."]
+    lines += ["", "Wall time (s): " + ", ".join(f"{t} {w:.0f}" for t, w in res["wall_s"].items())
               + f"; chiral integral W on the frames {res['frames_s']:.0f} s; this report "
               f"{wall:.0f} s in all (finished runs are loaded, not rerun)."]
     with open(path, "w") as fh:
@@ -292,7 +348,9 @@ def _plot(res, path) -> None:
     g = np.asarray(res["grid_pN"])
     fig, axs = plt.subplots(1, 3, figsize=(13, 3.8))
     for t, lab, sgn in (("a0_dlk-1", "Delta Lk = -1", 1), ("a0_dlk+1", "mirror (+1), -alpha", -1)):
-        c = res["curves"][t]
+        c = res["curves"].get(t)
+        if c is None:
+            continue
         for ax, k in zip(axs, ("eta", "contact", "wr")):
             m = np.array([x[0] for x in c[k]])
             s = np.array([x[1] for x in c[k]])
@@ -302,8 +360,9 @@ def _plot(res, path) -> None:
             ax.plot(x[o], sk * m[o], label=lab)
             ax.fill_between(x[o], (sk * m - 2 * s)[o], (sk * m + 2 * s)[o], alpha=0.25)
     for ax, k in zip(axs, ("eta", "contact", "wr")):
-        d = res["direct_alpha6"][k]
-        ax.errorbar([6.0], [d[0]], yerr=[2 * d[1]], fmt="ko", label="direct run, alpha = 6")
+        if res["direct_alpha6"]:
+            d = res["direct_alpha6"][k]
+            ax.errorbar([6.0], [d[0]], yerr=[2 * d[1]], fmt="ko", label="direct run, alpha = 6")
         ax.set_xlabel("alpha (pN)")
     axs[0].axhline(0, color="grey", lw=0.5)
     axs[0].set_ylabel("contact-averaged eta (rad; < 0 right-handed)")
