@@ -681,6 +681,11 @@ class Catenane(DNAQuantities, Scene):
                   f"{fmt(pt['contact_fraction'], 2)} of the time); braid angle "
                   f"{fmt(pt['braid_angle_rad'])} rad -> handedness {pt['handedness']}; chiral "
                   f"energy {fmt(pt['chiral_energy_pN_nm'], 2)} pN nm", file=file)
+        mv = pt.get("rigid_moves")
+        if mv:
+            print("Metropolis moves accepted: " + ", ".join(
+                f"{k} {mv[k]['acceptance']:.2f} of {mv[k]['attempted']}"
+                for k in ("shift", "turn", "arc") if k in mv and mv[k]["attempted"]), file=file)
         print(f"converged: {pt['converged']} ({pt['convergence_reason']}); "
               "+- : standard error across independent replicas", file=file)
         print(f"wall time {summary['wall_time_s']:.1f} s on {summary['platform']}; results in "
