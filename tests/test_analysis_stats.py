@@ -70,3 +70,16 @@ def test_invalid_input_raises():
         stats.mean_sem(np.ones((5, 5)))
     with pytest.raises(ValueError):
         stats.mean_sem(np.arange(20.0), method="jackknife")
+
+
+def test_bimodality_coefficient_of_known_distributions():
+    """Sarle's BC: 1/3 for a Gaussian, 5/9 for the uniform, 1 for two equal delta peaks
+    (exact population values; 4e5 samples, tolerance 1 %)."""
+    from dnabraid.analysis.stats import bimodality
+
+    rng = np.random.default_rng(7)
+    assert bimodality(rng.normal(size=400000))["bc"] == pytest.approx(1 / 3, rel=0.01)
+    assert bimodality(rng.uniform(size=400000))["bc"] == pytest.approx(5 / 9, rel=0.01)
+    assert bimodality(np.r_[np.zeros(100), np.ones(100)])["bc"] == pytest.approx(1.0)
+    with pytest.raises(ValueError):
+        bimodality([1.0, 2.0])

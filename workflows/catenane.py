@@ -38,6 +38,7 @@ import time
 
 import numpy as np
 
+from dnabraid.analysis.stats import bimodality
 from dnabraid.scenes import make_scene
 
 HERE = pathlib.Path(__file__).resolve().parent
@@ -179,12 +180,9 @@ def main(argv=None) -> int:
                   "|---|---|---|---|---|---|---|"]
         for tag, s in rows:
             w, c = _pooled(s, "writhe_1"), _pooled(s, "contact_length_nm")
-            m, sd = float(np.mean(w)), float(np.std(w))
-            z = (w - m) / sd if sd > 0 else w * 0
-            sk, ku = float(np.mean(z**3)), float(np.mean(z**4))
-            lines.append(f"| {tag} | {w.size} | {m:+.4f} | {sd:.4f} | {sk:+.2f} | "
-                         f"{(sk * sk + 1) / ku if ku > 0 else float('nan'):.3f} | "
-                         f"{int(np.sum(c > 0))} |")
+            bm = bimodality(w)
+            lines.append(f"| {tag} | {w.size} | {bm['mean']:+.4f} | {bm['sd']:.4f} | "
+                         f"{bm['skew']:+.2f} | {bm['bc']:.3f} | {int(np.sum(c > 0))} |")
         lines.append("")
     lines.append(f"workflow wall time {time.perf_counter() - t0:.0f} s (finished points are "
                  "loaded, not rerun); per-point reports in "

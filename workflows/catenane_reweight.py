@@ -175,6 +175,7 @@ def _verdict(reps, col) -> dict:
 
 def write_report(runs: dict, args, wall: float) -> None:
     from dnabraid.analysis.reweight import ReplicaReweighting
+    from dnabraid.analysis.stats import bimodality
 
     grid = np.round(np.arange(-10.0, 10.0001, 0.5), 6)
     tags = [t for t in POINTS if t in runs]
@@ -219,7 +220,7 @@ def write_report(runs: dict, args, wall: float) -> None:
            "rigid_moves": {t: runs[t]["points"][0].get("rigid_moves") for t in tags},
            "wall_s": {t: runs[t]["wall_time_s"] for t in runs}, "frames_s": t_frames,
            "n_frames": {t: int(sum(len(r["W"]) for r in frames[t])) for t in tags},
-           "writhe_bimodality": {t: _bimodality(np.concatenate([r["wr1"] for r in frames[t]]
+           "writhe_bimodality": {t: bimodality(np.concatenate([r["wr1"] for r in frames[t]]
                                                                + [r["wr2"] for r in frames[t]]))
                                  for t in tags}}
     base = os.path.splitext(args.table)[0]
@@ -233,18 +234,6 @@ def write_report(runs: dict, args, wall: float) -> None:
 def _f(x, p=3):
     m, s = x
     return f"{m:+.{p}f} +- {s:.{p}f}" if np.isfinite(m) else "-"
-
-
-def _bimodality(x) -> dict:
-    """Mean, sd, skewness and Sarle's bimodality coefficient (skew^2 + 1) / kurtosis of the
-    pooled writhes (> 5/9 hints at two modes: a buckled and an unbuckled ring)."""
-    x = np.asarray(x, float)
-    d = x - x.mean()
-    m2 = float(np.mean(d * d))
-    skew = float(np.mean(d**3) / m2**1.5)
-    kurt = float(np.mean(d**4) / m2**2)
-    return {"mean": float(x.mean()), "sd": math.sqrt(m2), "skew": skew,
-            "bc": (skew * skew + 1.0) / kurt}
 
 
 def _write_md(res, args, wall, path) -> None:

@@ -30,19 +30,10 @@ import time
 import numpy as np
 
 from dnabraid import reporters
+from dnabraid.analysis.stats import bimodality
 from dnabraid.scenes import make_scene
 
 HERE = pathlib.Path(__file__).resolve().parent
-
-
-def bimodality(x) -> tuple[float, float]:
-    """(skewness, Sarle's bimodality coefficient with the sample kurtosis, not excess)."""
-    x = np.asarray(x, float)
-    d = x - x.mean()
-    m2 = np.mean(d * d)
-    skew = float(np.mean(d**3) / m2**1.5)
-    kurt = float(np.mean(d**4) / m2**2)
-    return skew, (skew * skew + 1.0) / kurt
 
 
 def main(argv=None) -> int:
@@ -70,7 +61,8 @@ def main(argv=None) -> int:
                sorted(glob.glob(os.path.join(out, "replicas", "r*", "points", "*",
                                              "samples.csv")))]
         w = np.concatenate([p[len(p) // 5:] for p in per])
-        skew, bc = bimodality(w)
+        bm = bimodality(w)
+        skew, bc = bm["skew"], bm["bc"]
         pooled[dlk] = w
         wr = pt["writhe_1"]
         res.append({"delta_lk": dlk, "writhe_mean": wr["mean"], "writhe_sem": wr["sem"],
