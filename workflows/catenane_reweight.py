@@ -118,6 +118,9 @@ def main(argv=None) -> int:
 
 # -- analysis ----------------------------------------------------------------------------
 BURN_IN = 0.2  # fraction of each replica's frames dropped (>> the writhe's ~5e3 steps)
+#: reweighted values whose weights keep less than this fraction of the frames are flagged,
+#: and the switch alpha* is sought only where they keep more
+MIN_ESS_FRACTION = 0.1
 
 
 def replica_frames(run_dir: str, scene, stride: int) -> list[dict]:
@@ -194,8 +197,21 @@ def write_report(runs: dict, args, wall: float) -> None:
     for t in [t for t in ("a0_dlk-1", "a0_dlk+1") if t in runs]:
         curves[t] = {k: [rw[t].mean(a, *v) for a in grid] for k, v in cols.items()}
         curves[t]["ess"] = [rw[t].ess(a) for a in grid]
-    root_m, root_se = rw["a0_dlk-1"].root(grid, "eta*c", "c")
-    root_p, root_p_se = (rw["a0_dlk+1"].root(grid, "eta*c", "c") if mirror
+    def trusted(t):
+        # the contiguous alphas about alpha_0 whose weights keep >= MIN_ESS_FRACTION of the
+        # frames (beyond, a few frames carry the average: not a result)
+        n = sum(len(r["W"]) for r in frames[t])
+        ok = np.asarray(curves[t]["ess"]) >= MIN_ESS_FRACTION * n
+        i0 = int(np.argmin(abs(grid)))
+        lo, hi = i0, i0
+        while lo > 0 and ok[lo - 1]:
+            lo -= 1
+        while hi < len(grid) - 1 and ok[hi + 1]:
+            hi += 1
+        return grid[lo:hi + 1]
+
+    root_m, root_se = rw["a0_dlk-1"].root(trusted("a0_dlk-1"), "eta*c", "c")
+    root_p, root_p_se = (rw["a0_dlk+1"].root(trusted("a0_dlk+1"), "eta*c", "c") if mirror
                          else (math.nan, math.nan))
     # direct alpha = +6 run against the reweighted alpha = 0 ensemble
     direct = ({k: rw["a+6_dlk-1"].mean(6.0, *v) for k, v in cols.items()} if has_direct
@@ -293,9 +309,12 @@ def _write_md(res, args, wall, path) -> None:
             mir = ("-", "-", "-")
         lines.append(f"| {a:+g} | {a * L * L / B:+.0f} | {_f(eta)} | {mir[0]} "
                      f"| {_f(cm['contact'][i], 2)} | {_f(wr)} | {mir[1]} | {mir[2]} | "
-                     f"{cm['ess'][i] / n0:.2f} |")
+                     f"{cm['ess'][i] / n0:.2f}"
+                     f"{' (too few: not a result)' if cm['ess'][i] < MIN_ESS_FRACTION * n0 else ''}"
+                     " |")
     am, ap = res["alpha_star_pN"]["dlk-1"], res["alpha_star_pN"]["dlk+1_mirrored"]
     lines += ["", "## Where the link's handedness switches (<eta>_contact = 0)", "",
+              f"(sought where the weights keep >= {MIN_ESS_FRACTION:.0%} of the frames)", "",
               f"- from the Delta Lk = -1 ensemble: alpha* = {am[0]:+.2f} +- {am[1]:.2f} pN "
               f"({am[0] * L * L / B:+.0f} +- {am[1] * L * L / B:.0f} B/L^2)"]
     if cp:
