@@ -53,12 +53,12 @@ POINTS = {
     "a+6_dlk-1": {"alpha": 6.0, "delta_lk": -1, "link": 1},
 }
 #: the rings: 424 bp at 1 M (the scene's default, Delta/L = 0.02) with every run; 720 bp at
-#: 150 mM (Delta = 4.9 nm, Delta/L = 0.02 too; 50 beads of 4.896 nm) with the alpha = 0,
-#: Delta Lk = -1 ensemble alone
+#: 150 mM (Delta = 4.9 nm, Delta/L = 0.02 too; 50 beads of 4.896 nm) with the two alpha = 0
+#: ensembles (no direct run, no ring)
 SYSTEMS = {
     "424bp": ({}, tuple(POINTS), True),
     "720bp": ({"length_nm": 244.8, "salt_mM": 150.0, "bead_spacing_nm": 4.896},
-              ("a0_dlk-1",), False),
+              ("a0_dlk-1", "a0_dlk+1"), False),
 }
 
 
