@@ -11,6 +11,10 @@ Finished segments are skipped.
 :func:`run_packed` does the same for R replicas packed into one Context
 (:mod:`dnabraid.packing`): one engine steps all of them, and every replica keeps its own
 start, observables, invariant checks and point directories, exactly as if it ran alone.
+
+A model whose ``extra["moves"]`` holds a :class:`dnabraid.moves.RigidMoves` gets its
+Metropolis moves after every report interval of equilibration and sampling (each packed
+replica in its own frame); their counts go to ``moves.json`` in each point directory.
 """
 
 from __future__ import annotations
