@@ -1,11 +1,12 @@
-"""Metropolis rigid-body and crankshaft moves interleaved with Brownian dynamics (hybrid BD/MC).
+"""Metropolis rigid-body and crankshaft moves interleaved with Brownian dynamics (hybrid
+BD/MC).
 
 Some slow modes of a bead model are rigid-body motions of a whole molecule: two linked DNA
-minicircles slide through each other only by translating or turning one ring as a whole,
-and a ring of length L diffuses as a whole with D = kT / (zeta_l L). For 144-nm rings
-(zeta_l = 8.4 pN ns / nm^2) that is 3.4e-3 nm^2/ns: crossing the ring's radius (23 nm) takes
-about R^2 / (2 x 2 D) = 39 us, 3e6 Brownian steps of 12 ps. Equilibrium averages do not depend on how a state is
-reached, so a Metropolis move that translates or turns a whole group of particles
+minicircles slide through each other only by translating or turning one ring as a whole, and
+a ring of length L diffuses as a whole with D = kT / (zeta_l L). For 144-nm rings (zeta_l =
+8.4 pN ns / nm^2) that is 3.4e-3 nm^2/ns: crossing the ring's radius (23 nm) takes about R^2
+/ (2 x 2 D) = 39 us, 3e6 Brownian steps of 12 ps. Equilibrium averages do not depend on how
+a state is reached, so a Metropolis move that translates or turns a whole group of particles
 (symmetric proposal; accepted with probability min(1, exp(-dU / kT)); Metropolis et al.
 1953) leaves the Boltzmann distribution of the Brownian dynamics unchanged and decorrelates
 those modes in tens of moves (workflows/results/benchmark_moves.txt: 48x the contact
@@ -31,10 +32,10 @@ Moves (each proposal symmetric, so the Metropolis rule alone gives detailed bala
 A shift or turn changes no internal energy of a group (bonds, bends, twist frames move with
 it); a crankshaft changes the bend and twist at its two pivots. dU is taken from the
 engine's total potential energy either way. ``allowed(positions, kind)`` is a hard
-constraint checked before the energy
-(for linked rings: the Gauss linking number and each ring's Tw + Wr are unchanged, so no
-move passes a strand through another or a joint's twist through pi); a proposal it refuses is rejected, which keeps
-detailed balance within the allowed set (the topological class of the start).
+constraint checked before the energy (for linked rings: the Gauss linking number and each
+ring's Tw + Wr are unchanged, so no move passes a strand through another or a joint's twist
+through pi); a proposal it refuses is rejected, which keeps detailed balance within the
+allowed set (the topological class of the start).
 
 Brownian steps and moves alternate (:func:`dnabraid.runner._run_members` calls
 :func:`apply_moves` after every report interval of equilibration and sampling). With the
