@@ -12,7 +12,8 @@ dnabraid.moves; 8 replicas, half started apart, half in contact):
 
 1. ``a0_dlk-1``: alpha = 0, Delta Lk_i = -1, Lk_12 = +1;
 2. ``a0_dlk+1``: its mirror image, alpha = 0, Delta Lk_i = +1, Lk_12 = -1;
-3. ``a+6_dlk-1``: alpha = +6 pN, Delta Lk_i = -1, run directly (checks the reweighting);
+3. ``a+6_dlk-1``, ``a+3_dlk-1``: alpha = +6 and +3 pN, Delta Lk_i = -1, run directly (check
+   the reweighting; at +6 the weights keep ~3 % of the frames, at +3 ~60 %);
 4. ``ring``: one 144-nm ring at the same time step, <dTw_half^2> against L / (4 pi^2 C)
    (exact for the model: the moves and the step leave it unbiased).
 
@@ -51,7 +52,10 @@ POINTS = {
     "a0_dlk-1": {"alpha": 0.0, "delta_lk": -1, "link": 1},
     "a0_dlk+1": {"alpha": 0.0, "delta_lk": 1, "link": -1},
     "a+6_dlk-1": {"alpha": 6.0, "delta_lk": -1, "link": 1},
+    "a+3_dlk-1": {"alpha": 3.0, "delta_lk": -1, "link": 1},
 }
+#: the direct runs: tag -> alpha (pN)
+DIRECT = {"a+6_dlk-1": 6.0, "a+3_dlk-1": 3.0}
 #: the rings: 424 bp at 1 M (the scene's default, Delta/L = 0.02) with every run; 720 bp at
 #: 150 mM (Delta = 4.9 nm, Delta/L = 0.02 too; 50 beads of 4.896 nm) with the two alpha = 0
 #: ensembles (no direct run, no ring)
@@ -75,7 +79,7 @@ def run_all(args, log) -> dict:
     c = {**common_keys(args), **geometry}
     for tag in tags:
         keys = {**c, **POINTS[tag]}
-        if tag.startswith("a+6"):
+        if tag in DIRECT:
             keys["steps"] = args.direct_steps
         out[tag] = run_point(tag, keys, args.out, log)
         print(f"{tag}: done ({out[tag]['wall_time_s']:.0f} s)", flush=True)
@@ -90,7 +94,7 @@ def run_all(args, log) -> dict:
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--steps", type=int, default=400_000)
-    ap.add_argument("--direct-steps", type=int, default=250_000)
+    ap.add_argument("--direct-steps", type=int, default=120_000)
     ap.add_argument("--ring-steps", type=int, default=100_000)
     ap.add_argument("--equilibration", type=int, default=40_000)
     ap.add_argument("--replicas", type=int, default=8)
@@ -182,7 +186,7 @@ def write_report(runs: dict, args, wall: float) -> None:
 
     grid = np.round(np.arange(-10.0, 10.0001, 0.5), 6)
     tags = [t for t in POINTS if t in runs]
-    mirror, has_direct = "a0_dlk+1" in runs, "a+6_dlk-1" in runs
+    mirror = "a0_dlk+1" in runs
     scene = {t: make_scene("catenane", {k: v for k, v in runs[t]["scene"].items()
                                         if k != "scene"}) for t in tags}
     kT = scene["a0_dlk-1"].kT
@@ -213,10 +217,12 @@ def write_report(runs: dict, args, wall: float) -> None:
     root_m, root_se = rw["a0_dlk-1"].root(trusted("a0_dlk-1"), "eta*c", "c")
     root_p, root_p_se = (rw["a0_dlk+1"].root(trusted("a0_dlk+1"), "eta*c", "c") if mirror
                          else (math.nan, math.nan))
-    # direct alpha = +6 run against the reweighted alpha = 0 ensemble
-    direct = ({k: rw["a+6_dlk-1"].mean(6.0, *v) for k, v in cols.items()} if has_direct
-              else None)
-    predicted = {k: rw["a0_dlk-1"].mean(6.0, *v) for k, v in cols.items()}
+    # direct runs against the reweighted alpha = 0 ensemble
+    direct = {f"{a:g}": {"direct": {k: rw[t].mean(a, *v) for k, v in cols.items()},
+                         "reweighted": {k: rw["a0_dlk-1"].mean(a, *v) for k, v in cols.items()},
+                         "ess_fraction": rw["a0_dlk-1"].ess(a)
+                         / sum(len(r["W"]) for r in frames["a0_dlk-1"])}
+              for t, a in DIRECT.items() if t in runs}
     verdicts = {t: {c: _verdict(frames[t], c) for c in ("wr1", "wr2", "c", "W")}
                 for t in tags}
     ring = runs["ring"]["points"][0] if "ring" in runs else None
@@ -230,7 +236,7 @@ def write_report(runs: dict, args, wall: float) -> None:
                           for k, v in c.items()} for t, c in curves.items()},
            "alpha_star_pN": {"dlk-1": [root_m, root_se], "dlk+1_mirrored": [-root_p,
                                                                               root_p_se]},
-           "direct_alpha6": direct, "reweighted_alpha6": predicted, "verdicts": verdicts,
+           "direct": direct, "verdicts": verdicts,
            "ring_twist_half_variance": ring and ring["twist_half_variance_1"],
            "ring_twist_half_variance_theory": ring and ring["twist_half_variance_theory"],
            "rigid_moves": {t: runs[t]["points"][0].get("rigid_moves") for t in tags},
@@ -326,11 +332,11 @@ def _write_md(res, args, wall, path) -> None:
         lines += [f"- the two agree within {abs(am[0] - ap[0]) / math.hypot(am[1], ap[1]):.2f}"
                   f" SE; combined alpha* = {comb:+.2f} +- {1 / math.sqrt(w1 + w2):.2f} pN "
                   f"({comb * L * L / B:+.0f} B/L^2)"]
-    d, p = res["direct_alpha6"], res["reweighted_alpha6"]
-    if d:
-        lines += ["", "## Direct run at alpha = +6 pN against the reweighted alpha = 0 "
-                  "ensemble", "", "| observable | direct | reweighted from alpha = 0 | z |",
-                  "|---|---|---|---|"]
+    for a, dd in res["direct"].items():
+        d, p = dd["direct"], dd["reweighted"]
+        lines += ["", f"## Direct run at alpha = {a} pN against the reweighted alpha = 0 "
+                  f"ensemble (weights keep {dd['ess_fraction']:.0%} of the frames)", "",
+                  "| observable | direct | reweighted from alpha = 0 | z |", "|---|---|---|---|"]
         for k, name in (("eta", "<eta>_contact (rad)"), ("contact", "in contact"),
                         ("wr", "<Wr> per ring"), ("c", "contact length (nm)")):
             z = (d[k][0] - p[k][0]) / math.hypot(d[k][1], p[k][1])
@@ -368,9 +374,10 @@ def _plot(res, path) -> None:
             ax.plot(x[o], sk * m[o], label=lab)
             ax.fill_between(x[o], (sk * m - 2 * s)[o], (sk * m + 2 * s)[o], alpha=0.25)
     for ax, k in zip(axs, ("eta", "contact", "wr")):
-        if res["direct_alpha6"]:
-            d = res["direct_alpha6"][k]
-            ax.errorbar([6.0], [d[0]], yerr=[2 * d[1]], fmt="ko", label="direct run, alpha = 6")
+        for a, dd in res["direct"].items():
+            d = dd["direct"][k]
+            ax.errorbar([float(a)], [d[0]], yerr=[2 * d[1]], fmt="ko",
+                        label="direct runs" if a == next(iter(res["direct"])) else None)
         ax.set_xlabel("alpha (pN)")
     axs[0].axhline(0, color="grey", lw=0.5)
     axs[0].set_ylabel("contact-averaged eta (rad; < 0 right-handed)")
