@@ -47,8 +47,8 @@ R-hat 1.4). Hence the Metropolis moves after every report interval (``rigid_move
 a relative shift of the rings, a turn of one ring about its centre, a crankshaft turn of an
 arc of up to half a ring; :mod:`dnabraid.moves`), which keep the Boltzmann distribution
 exactly and never change Lk_12 or Lk_i (a move that would is refused). With 10 moves per
-100 steps the contact length's bulk ESS over 4 replicas x 8e4 steps rose from 11 to
-~2000 (workflows/results/benchmark_moves.txt); the single ring's <dTw_half^2> stays exact
+100 steps the contact length's bulk ESS over 4 replicas x 8.8e4 steps rose from 13 to
+1217 (workflows/results/benchmark_moves.txt); the single ring's <dTw_half^2> stays exact
 (tests/test_catenane.py). ``rigid_moves = 0`` is plain Brownian dynamics (whose time
 correlations are physical; the moves' are not).
 """
