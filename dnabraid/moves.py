@@ -54,18 +54,22 @@ from collections.abc import Callable
 
 import numpy as np
 
-__all__ = ["RigidMoves", "random_rotation", "MoveStats"]
+__all__ = ["RigidMoves", "axis_rotation", "random_rotation", "MoveStats", "apply_moves"]
+
+
+def axis_rotation(axis, angle_rad: float) -> np.ndarray:
+    """The rotation matrix by ``angle_rad`` about the unit vector ``axis`` (Rodrigues)."""
+    K = np.array([[0.0, -axis[2], axis[1]], [axis[2], 0.0, -axis[0]],
+                  [-axis[1], axis[0], 0.0]])
+    return np.eye(3) + math.sin(angle_rad) * K + (1.0 - math.cos(angle_rad)) * (K @ K)
 
 
 def random_rotation(rng: np.random.Generator, max_angle_rad: float) -> np.ndarray:
     """A rotation matrix about a uniformly random axis by an angle uniform in
-    [-max_angle_rad, max_angle_rad] (Rodrigues)."""
+    [-max_angle_rad, max_angle_rad]."""
     axis = rng.normal(size=3)
     axis /= np.linalg.norm(axis)
-    a = rng.uniform(-max_angle_rad, max_angle_rad)
-    K = np.array([[0.0, -axis[2], axis[1]], [axis[2], 0.0, -axis[0]],
-                  [-axis[1], axis[0], 0.0]])
-    return np.eye(3) + math.sin(a) * K + (1.0 - math.cos(a)) * (K @ K)
+    return axis_rotation(axis, rng.uniform(-max_angle_rad, max_angle_rad))
 
 
 def _ball(rng: np.random.Generator, radius: float) -> np.ndarray:
@@ -93,7 +97,8 @@ class MoveStats:
 
 
 class RigidMoves:
-    """Metropolis rigid-body moves of particle groups (module docstring).
+    """Metropolis rigid-body moves of particle groups and crankshaft moves of rings (module
+    docstring).
 
     Parameters
     ----------
@@ -117,7 +122,8 @@ class RigidMoves:
         Hard constraint on the model's positions (nm) after a move of ``kind`` ('shift',
         'turn' or 'arc').
     moves_per_call : int
-        Proposals per call (per replica), alternating shift and turn.
+        Proposals per call (per replica), cycling through the kinds in use (shift, turn,
+        arc).
     seed : int
     """
 
@@ -193,10 +199,7 @@ class RigidMoves:
             if norm == 0.0:
                 return kind, new
             axis /= norm
-            phi = self.arc_angle * (2.0 * rng.uniform() - 1.0)
-            K = np.array([[0.0, -axis[2], axis[1]], [axis[2], 0.0, -axis[0]],
-                          [-axis[1], axis[0], 0.0]])
-            R = np.eye(3) + math.sin(phi) * K + (1.0 - math.cos(phi)) * (K @ K)
+            R = axis_rotation(axis, self.arc_angle * (2.0 * rng.uniform() - 1.0))
             moved = np.concatenate([beads[idx[1:-1]], sides[idx[:-1]]])
             new[moved] = (pos[moved] - a) @ R.T + a
         else:

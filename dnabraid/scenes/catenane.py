@@ -56,6 +56,7 @@ correlations are physical; the moves' are not).
 from __future__ import annotations
 
 import dataclasses
+import json
 import math
 import os
 import time
@@ -126,6 +127,12 @@ def hopf_start(n: int, bead_spacing_nm: float, rings: int = 2, link: int = 1,
     return [r1, r2]
 
 
+def ring_tw_wr(ring_pos, side_pos) -> tuple[np.ndarray, float, float]:
+    """(joint twist angles omega_j (rad, seam included), Tw, Wr) of one framed ring (turns)."""
+    om = ring_twist(ring_pos, side_pos, per_joint=True)
+    return om, float(np.sum(om)) / TWO_PI, writhe(ring_pos)
+
+
 def _closed(p):
     return np.vstack([p, p[:1]])
 
@@ -175,9 +182,7 @@ class RingObservables(Observable):
         out = {}
         err = 0.0
         for k, (r, s) in enumerate(zip(self.rings, self.sides), 1):
-            om = ring_twist(pos[r], pos[s], per_joint=True)
-            tw = float(np.sum(om)) / TWO_PI
-            wr = writhe(pos[r])
+            om, tw, wr = ring_tw_wr(pos[r], pos[s])
             h = len(om) // 2
             out[f"twist_{k}"] = tw
             out[f"writhe_{k}"] = wr
@@ -266,8 +271,6 @@ def _between(means) -> dict:
 
 def _moves_summary(dirs) -> dict | None:
     """Rigid-move counts summed over the replicas (their ``moves.json``); None without."""
-    import json
-
     tot: dict = {}
     for d in dirs:
         path = os.path.join(d, "moves.json")
@@ -499,8 +502,7 @@ class Catenane(DNAQuantities, Scene):
                     return False
                 if kind != "arc":  # a rigid motion keeps each ring's Tw and Wr
                     return True
-                return all(abs(float(np.sum(ring_twist(pos[r], pos[sd], per_joint=True)))
-                               / TWO_PI + writhe(pos[r]) - lk) < 0.5
+                return all(abs(sum(ring_tw_wr(pos[r], pos[sd])[1:]) - lk) < 0.5
                            for r, sd in zip(ri, si))
 
             kit.extra["moves"] = RigidMoves(
