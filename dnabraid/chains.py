@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from collections.abc import Callable
 
 import numpy as np
 import openmm
@@ -27,8 +28,8 @@ import openmm.app as app
 from . import forcefield, units
 from .forces import bending_force, stretch_force, wall_force, wca_exclusions, wca_force
 
-__all__ = ["DNAParameters", "ChainKit", "Model", "TimeStep", "GROUPS", "passage_barrier_kT",
-           "max_bead_spacing_nm", "MIN_PASSAGE_BARRIER_KT"]
+__all__ = ["DNAParameters", "ChainKit", "Model", "ForceRebuild", "TimeStep", "GROUPS",
+           "passage_barrier_kT", "max_bead_spacing_nm", "MIN_PASSAGE_BARRIER_KT"]
 
 #: Force groups, one per physical term, so blow-ups and benchmarks can name the term.
 GROUPS = {"stretch": 0, "bend": 1, "wca": 2, "wall": 3, "pull": 4, "trap": 5, "link": 6,
@@ -52,6 +53,7 @@ class DNAParameters:
     """
 
     kT: float
+    temperature_K: float
     bead_spacing_nm: float
     persistence_nm: float
     kappa_kT: float
@@ -85,7 +87,8 @@ class DNAParameters:
         kT = units.kT(temperature_K)
         b = bead_spacing_nm
         zeta = units.stokes_friction(forcefield.mechanics()["hydrodynamic_radius_fraction"] * b)
-        return cls(kT=kT, bead_spacing_nm=b, persistence_nm=persistence_nm,
+        return cls(kT=kT, temperature_K=float(temperature_K), bead_spacing_nm=b,
+                   persistence_nm=persistence_nm,
                    kappa_kT=forcefield.bending_stiffness_kT(b, persistence_nm),
                    stretch_modulus_pN=stretch_modulus_pN,
                    diameter_nm=float(diameter_nm) if diameter_nm > 0 else salt.diameter_nm,
@@ -103,13 +106,24 @@ class TimeStep:
     reason: str
 
 
+@dataclasses.dataclass(frozen=True)
+class ForceRebuild:
+    """How to build a force anew over several packed copies (a force OpenMM cannot copy,
+    such as the chiral ``PythonForce``): ``make(chains)`` returns the force over ``chains``
+    (one int array per strand, particle indices of one copy)."""
+
+    make: Callable[[list], openmm.Force]
+    chains: tuple
+
+
 @dataclasses.dataclass
 class Model:
-    """A built scene: OpenMM objects plus the bookkeeping the engine and observables need.
+    """A built scene: the OpenMM System plus the bookkeeping the run layer and observables
+    need. It carries no scene: everything the run driver, engine, packing and moves use is
+    a typed field here.
 
     Attributes
     ----------
-    scene : Scene
     system : openmm.System
     topology : openmm.app.Topology
     positions : ndarray (N, 3), nm
@@ -126,11 +140,22 @@ class Model:
         The bead's orientation particle (torsionally constrained scenes only).
     dna : DNAParameters
     timestep : TimeStep
-    extra : dict
-        Scene-specific particles (e.g. ``bead_center``).
+    length_nm : float
+        Contour length of each strand (nm); with ``force_pN`` it sizes a packed copy's cell.
+    force_pN : float
+        Force pulling the strands (pN); 0 when nothing pulls.
+    rebuild_forces : dict name -> ForceRebuild
+        Forces that packing builds anew over every copy instead of copying.
+    moves : dnabraid.run.moves.RigidMoves or None
+        Metropolis moves the driver interleaves with the Brownian steps.
+    exact_start : bool
+        True when ``positions`` is an exact draw of the equilibrium (not minimised).
+    rings, ring_sides : list of int arrays
+        Beads of each closed ring and the side particle of each of its bonds.
+    bead_center : int or None
+        The magnetic bead's centre particle (tweezer scenes with a bead).
     """
 
-    scene: object
     system: openmm.System
     topology: app.Topology
     positions: np.ndarray
@@ -144,7 +169,14 @@ class Model:
     bead_orientation: int | None = None
     dna: DNAParameters | None = None
     timestep: TimeStep | None = None
-    extra: dict = dataclasses.field(default_factory=dict)
+    length_nm: float = 0.0
+    force_pN: float = 0.0
+    rebuild_forces: dict = dataclasses.field(default_factory=dict)
+    moves: object | None = None
+    exact_start: bool = False
+    rings: list = dataclasses.field(default_factory=list)
+    ring_sides: list = dataclasses.field(default_factory=list)
+    bead_center: int | None = None
 
 
 class ChainKit:
@@ -169,7 +201,12 @@ class ChainKit:
         self.attachments: list = []
         self.sides = None
         self.bead_orientation = None
-        self.extra: dict = {}
+        self.bead_center: int | None = None
+        self.rebuild_forces: dict = {}
+        self.moves = None
+        self.exact_start = False
+        self.rings: list = []
+        self.ring_sides: list = []
         self._ring_forces = None
 
     # -- particles ---------------------------------------------------------------------
@@ -352,8 +389,8 @@ class ChainKit:
         itself, or a joint angle through pi, would change it: the scenes check it).
         Returns the side particles.
         """
-        from .forces.twist import frame_springs, ring_joints, twist_force
-        from .geometry.twist import ring_side_positions
+        from .forces.twist_frames import frame_springs, ring_joints, twist_force
+        from .geometry.ribbon import ring_side_positions
 
         ring = np.asarray(ring, int)
         if not any(len(c) == len(ring) and np.array_equal(c, ring) and cl
@@ -416,7 +453,37 @@ class ChainKit:
                   f"(Euler-Maruyama stability limit 2/rate = {2e3 / total:.4g} ps)")
         return TimeStep(rates, total, stiff, dt_ns, reason)
 
-    def finish(self, scene, *, safety: float, params=None) -> Model:
+    def add_rebuildable_force(self, make, chains, name: str, *, rate: float | None = None
+                              ) -> openmm.Force:
+        """Add ``make(chains)`` as term ``name`` and remember how to build it over packed
+        copies (:class:`ForceRebuild`): for forces OpenMM cannot copy."""
+        chains = tuple(np.asarray(c, int).copy() for c in chains)
+        self.rebuild_forces[name] = ForceRebuild(make, chains)
+        return self.add_force(make(list(chains)), name, rate=rate)
+
+    def add_chiral(self, alpha_pN: float, chains, *, closed: bool = False) -> openmm.Force:
+        """The Kornyshev chiral term alpha tan(eta/2) per unit contact length between the
+        facing segments of ``chains`` (:func:`dnabraid.forces.chiral.chiral_force`;
+        docs/chirality.md), rebuilt over every copy when replicas are packed. Its curvature
+        per unit alpha is at most ~0.1 A / lambda_D^2 per nm of partner (A ~ 1/(2 Delta)),
+        summed over ~2 Delta of partner and both ends: that bounds its rate."""
+        from .forces.chiral import chiral_force
+
+        d = self.dna
+
+        def make(chs, d=d, alpha=float(alpha_pN), closed=bool(closed)):
+            return chiral_force(chs, alpha, delta_nm=d.diameter_nm, debye_nm=d.debye_nm,
+                                bead_spacing_nm=d.bead_spacing_nm, closed=closed,
+                                name="chiral")
+
+        return self.add_rebuildable_force(
+            make, chains, "chiral",
+            rate=abs(alpha_pN) * 0.1 / d.debye_nm**2 * 4.0 / d.zeta_bead)
+
+    def finish(self, *, safety: float, params=None, length_nm: float = 0.0,
+               force_pN: float = 0.0) -> Model:
+        """The :class:`Model`: the time step from the stiffest mode at ``safety``, the
+        derived numbers (plus ``params``), and this kit's typed extras."""
         ts = self.time_step(safety)
         d = self.dna
         p = {
@@ -434,10 +501,13 @@ class ChainKit:
             "time_step_reason": ts.reason,
         }
         p.update(params or {})
-        return Model(scene, self.system, self.topology, self.positions, self.chains,
+        return Model(self.system, self.topology, self.positions, self.chains,
                      list(self.attachments), list(self.fixed), self.bonds(), p,
                      dict(self.present), self.sides, self.bead_orientation, d, ts,
-                     dict(self.extra))
+                     length_nm=float(length_nm), force_pN=float(force_pN),
+                     rebuild_forces=dict(self.rebuild_forces), moves=self.moves,
+                     exact_start=bool(self.exact_start), rings=list(self.rings),
+                     ring_sides=list(self.ring_sides), bead_center=self.bead_center)
 
 
 # ------------------------------------------------------------------------- strand passage

@@ -15,12 +15,13 @@ import os
 import sys
 
 from . import scenes as scn
-from .continuum._validate import InputError
-from .engine import PlatformError, pin_to_one_core
-from .rundir import RunDirError
+from .errors import UserError
+from .progress import progress_bar
+from .run.contract import ThermalContract
+from .run.workers import pin_to_core, usable_cores
 
 #: Errors that are the user's input, printed without a traceback (anything else is a bug).
-USER_ERRORS = (scn.SceneError, RunDirError, PlatformError, FileNotFoundError, InputError)
+USER_ERRORS = (UserError, FileNotFoundError)
 
 
 def _parse_sets(items) -> dict:
@@ -55,17 +56,14 @@ def cmd_run(args) -> int:
     threads = args.threads
     # Replicas run in processes that pin themselves to a core each; pin this process only
     # when everything runs in it (one worker), and then give OpenMM one thread.
-    parallel = min(getattr(s, "workers", 0) or len(os.sched_getaffinity(0)),
-                   getattr(s, "replicas", 1)) > 1
+    parallel = isinstance(s, ThermalContract) and min(
+        s.workers or len(usable_cores()), s.replicas) > 1
     if args.platform == "CPU" and not args.no_pin and threads in (None, 1) and not parallel:
-        pin_to_one_core()
+        pin_to_core(0)
         threads = 1
 
     def bar(total):
-        from tqdm import tqdm
-
-        return tqdm(total=total, unit="step", unit_scale=True, desc=s.name,
-                    disable=args.quiet, dynamic_ncols=True)
+        return progress_bar(total, unit="step", desc=s.name, disable=args.quiet)
 
     print(f"dnabraid run: scene '{s.name}' -> {out}", file=sys.stderr)
     summary = s.run(out, platform=args.platform, threads=threads, progress_factory=bar)
@@ -78,15 +76,12 @@ def run_sweep_verbose(spec, *, workers=None, scheduler=None, platform="CPU", qui
 
     Returns the :class:`dnabraid.sweep.SweepResult` (also used by workflows/*.py).
     """
-    from tqdm import tqdm
-
     from . import sweep as swp
 
     print(f"dnabraid sweep: {len(spec.points)} points of scene '{spec.points[0].scene.name}' "
           f"-> {spec.out}" + (f" on Dask scheduler {scheduler}" if scheduler else ""),
           file=sys.stderr)
-    bar = tqdm(total=len(spec.points), unit="point", desc="sweep", disable=quiet,
-               dynamic_ncols=True)
+    bar = progress_bar(len(spec.points), unit="point", desc="sweep", disable=quiet)
 
     def progress(rec):
         bar.update(1)
@@ -122,7 +117,7 @@ def cmd_sweep(args) -> int:
 
 
 def cmd_continuum(args) -> int:
-    from .continuum import cli as ccli
+    from .continuum import commands as ccli
 
     result = ccli.run(args)
     if args.json:
@@ -163,7 +158,7 @@ def build_parser() -> argparse.ArgumentParser:
     s = sub.add_parser("scenes", help="list built-in scenes and their keys")
     s.set_defaults(func=cmd_scenes)
     try:
-        from .continuum import cli as ccli
+        from .continuum import commands as ccli
 
         c = sub.add_parser("continuum", help="rod-theory equilibria (ply, knot, overhand, tweezer, closed)")
         ccli.add_subparsers(c)

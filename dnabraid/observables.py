@@ -1,30 +1,93 @@
-"""Observables of a tweezer run: each carries its unit, when it is sampled and its invariant.
+"""Observables of a thermal run: each declares its columns (unit, meaning, how reported)
+once, when it is sampled and its invariant.
 
 An observable is computed from the positions (nm) of one state, in a fixed order, so that
 later ones may use earlier values (``values``). ``every`` is ``"sample"`` (each report
 interval) or ``"frame"`` (each trajectory frame). An invariant check returns a message
 when a conservation law is broken (the strands passed through each other, the bead slipped
-in its trap); the runner turns that into :class:`dnabraid.engine.SimulationBlowUp`.
+in its trap); the run driver turns that into :class:`dnabraid.run.engine.SimulationBlowUp`.
+
+Each produced name has one :class:`Column`: its unit and meaning (the run's CSV headers and
+``summary.json``'s ``units``), whether it is a result (``reported``: the printed table, the
+sweep rows and the plots read it) and whether its convergence decides a point's verdict.
+Adding an observable to a scene is one class here and one line in the scene's
+``observables``.
 """
 
 from __future__ import annotations
 
 import abc
+import dataclasses
 import math
 
 import numpy as np
 
 from .geometry.curves import catenation_number
-from .geometry.twist import plectoneme_summary, tether_twist, writhe_open
+from .geometry.ribbon import plectoneme_summary, tether_twist, writhe_open
+from .units import TWO_PI
 
-TWO_PI = 2.0 * math.pi
+__all__ = ["Column", "ObserveContext", "Observable", "Extension", "BeadAngle", "TrapTorque",
+           "Catenation", "TwistWrithe", "TwistTorque", "Plectonemes", "columns_of",
+           "error_name"]
 
-__all__ = ["Observable", "Extension", "BeadAngle", "TrapTorque", "Catenation", "TwistWrithe",
-           "TwistTorque", "Plectonemes"]
+
+@dataclasses.dataclass(frozen=True)
+class Column:
+    """One observable column, declared once.
+
+    Attributes
+    ----------
+    unit : str
+        Its unit ("" for a pure number).
+    meaning : str
+    reported : bool
+        A result: printed in the run's table (mean +- error), written to the sweep rows
+        (mean and ``error_name``) and plotted.
+    digits : int
+        Decimals printed at least (more when the error needs them, at most 4).
+    width : int
+        Width of its column in the printed table.
+    verdict : bool
+        Its convergence decides the point's verdict.
+    summarised : bool
+        The point summary gives its mean and error (False for a check or a quantity the
+        scene summarises its own way, e.g. a linking number or an angle that is NaN
+        without contact).
+    """
+
+    unit: str
+    meaning: str
+    reported: bool = False
+    digits: int = 2
+    width: int = 20
+    verdict: bool = False
+    summarised: bool = True
+
+    def describe(self) -> str:
+        """Unit and meaning as ``summary.json`` writes them."""
+        return f"{self.unit}: {self.meaning}" if self.unit else self.meaning
+
+
+def error_name(name: str, unit: str) -> str:
+    """Name of a column's standard error in sweep rows: the unit stays last
+    (``extension_nm`` -> ``extension_sem_nm``, ``torque_pN_nm`` -> ``torque_sem_pN_nm``,
+    ``catenation`` -> ``catenation_sem``)."""
+    suffix = "_" + unit.replace(" ", "_") if unit else ""
+    if suffix and name.endswith(suffix):
+        return name[: -len(suffix)] + "_sem" + suffix
+    return name + "_sem"
+
+
+@dataclasses.dataclass
+class ObserveContext:
+    """What an observable may know of the run besides the positions: the trap angle now
+    (turns; 0 for scenes without a trap)."""
+
+    trap_turns: float = 0.0
 
 
 class Observable(abc.ABC):
-    """Base: ``columns`` maps each produced name to its unit and meaning."""
+    """Base: ``columns`` maps each produced name to its :class:`Column`."""
 
     every = "sample"
     columns: dict = {}
@@ -33,12 +96,19 @@ class Observable(abc.ABC):
         """Called when a point starts or resumes (stateful observables re-sync)."""
 
     @abc.abstractmethod
-    def __call__(self, pos, ctx: dict, values: dict) -> dict:
+    def __call__(self, pos, ctx: ObserveContext, values: dict) -> dict:
         """Values (name -> float) at positions ``pos`` (nm); ``values`` holds earlier ones."""
 
-    def check(self, values: dict, ctx: dict) -> str | None:
+    def check(self, values: dict, ctx: ObserveContext) -> str | None:
         """A message if an invariant is broken, else None."""
         return None
+
+
+def columns_of(observables, every: str | None = None) -> dict:
+    """name -> :class:`Column` of ``observables`` (only those sampled ``every``, if given),
+    in the order they are computed."""
+    return {k: c for ob in observables if every is None or ob.every == every
+            for k, c in ob.columns.items()}
 
 
 class Extension(Observable):
@@ -46,7 +116,9 @@ class Extension(Observable):
 
     def __init__(self, attachments):
         self.att = list(attachments)
-        self.columns = {"extension_nm": ("nm", "mean height of the bead attachment points")}
+        self.columns = {"extension_nm": Column("nm", "mean height of the bead attachment "
+                                               "points", reported=True, digits=1,
+                                               verdict=True)}
 
     def __call__(self, pos, ctx, values):
         return {"extension_nm": float(np.mean(pos[self.att, 2]))}
@@ -58,10 +130,12 @@ class BeadAngle(Observable):
     ``pair`` = (p, q): the angle of q - p in the xy plane.
     """
 
-    def __init__(self, pair):
+    def __init__(self, pair, trap_stiffness_pN_nm: float, turn_rate: float):
         self.p, self.q = pair
+        self.K = float(trap_stiffness_pN_nm)
+        self.rate = float(turn_rate)
         self._phi = 0.0
-        self.columns = {"bead_angle_turns": ("turns", "bead angle, unwrapped")}
+        self.columns = {"bead_angle_turns": Column("turns", "bead angle, unwrapped")}
 
     def reset(self, trap_turns, pos):
         self._phi = TWO_PI * trap_turns
@@ -77,12 +151,12 @@ class BeadAngle(Observable):
         return {"bead_angle_turns": self._update(pos) / TWO_PI}
 
     def check(self, values, ctx):
-        lag = values["bead_angle_turns"] - ctx["trap_turns"]
+        lag = values["bead_angle_turns"] - ctx.trap_turns
         if abs(lag) > 0.25:
             return (f"the bead slipped in the rotational trap (bead "
-                    f"{values['bead_angle_turns']:.3f} turns, trap {ctx['trap_turns']:.3f} turns)"
-                    f": the torque exceeded the trap stiffness K = {ctx['trap_stiffness']} pN nm "
-                    f"or the turns were ramped too fast (turn_rate = {ctx['turn_rate']}); raise "
+                    f"{values['bead_angle_turns']:.3f} turns, trap {ctx.trap_turns:.3f} turns)"
+                    f": the torque exceeded the trap stiffness K = {self.K} pN nm "
+                    f"or the turns were ramped too fast (turn_rate = {self.rate}); raise "
                     "trap_stiffness_pN_nm or lower turn_rate")
         return None
 
@@ -92,10 +166,12 @@ class TrapTorque(Observable):
 
     def __init__(self, stiffness_pN_nm: float):
         self.K = float(stiffness_pN_nm)
-        self.columns = {"torque_pN_nm": ("pN nm", "torque the trap applies; > 0 holds n > 0")}
+        self.columns = {"torque_pN_nm": Column("pN nm", "torque the trap applies; > 0 holds "
+                                               "n > 0", reported=True, digits=1,
+                                               verdict=True)}
 
     def __call__(self, pos, ctx, values):
-        lag = TWO_PI * (values["bead_angle_turns"] - ctx["trap_turns"])
+        lag = TWO_PI * (values["bead_angle_turns"] - ctx.trap_turns)
         return {"torque_pN_nm": -self.K * math.sin(lag)}
 
 
@@ -106,8 +182,9 @@ class Catenation(Observable):
 
     def __init__(self, chains):
         self.c0, self.c1 = chains
-        self.columns = {"catenation": ("turns", "Gauss linking number, strands closed by "
-                                                "vertical rays")}
+        self.columns = {"catenation": Column("turns", "Gauss linking number, strands closed "
+                                             "by vertical rays", reported=True, digits=3,
+                                             width=18)}
 
     def __call__(self, pos, ctx, values):
         return {"catenation": catenation_number(pos[self.c0], pos[self.c1])}
@@ -127,8 +204,9 @@ class TwistWrithe(Observable):
 
     def __init__(self, chain, sides, bead_orientation):
         self.c, self.sides, self.m = chain, sides, bead_orientation
-        self.columns = {"twist": ("turns", "Tw, clamps included"),
-                        "writhe": ("turns", "Wr, Gauss integral, chain closed by vertical rays")}
+        self.columns = {"twist": Column("turns", "Tw, clamps included"),
+                        "writhe": Column("turns", "Wr, Gauss integral, chain closed by "
+                                         "vertical rays")}
 
     def __call__(self, pos, ctx, values):
         c = self.c
@@ -151,7 +229,7 @@ class TwistTorque(Observable):
     def __init__(self, chain, sides, bead_orientation, C_nm: float, kT: float, L_nm: float):
         self.c, self.sides, self.m = chain, sides, bead_orientation
         self.f = TWO_PI * C_nm * kT / L_nm
-        self.columns = {"twist_torque_pN_nm": ("pN nm", "2 pi Tw C kT / L")}
+        self.columns = {"twist_torque_pN_nm": Column("pN nm", "2 pi Tw C kT / L")}
 
     def __call__(self, pos, ctx, values):
         c = self.c
@@ -166,9 +244,10 @@ class Plectonemes(Observable):
 
     def __init__(self, chain):
         self.c = chain
-        self.columns = {"plectonemes": ("", "number per frame"),
-                        "plectoneme_length_nm": ("nm", "DNA in plectonemes"),
-                        "plectoneme_tip_nm": ("nm", "tip of the longest, contour from surface")}
+        self.columns = {"plectonemes": Column("", "number per frame"),
+                        "plectoneme_length_nm": Column("nm", "DNA in plectonemes"),
+                        "plectoneme_tip_nm": Column("nm", "tip of the longest, contour from "
+                                                    "surface")}
 
     def __call__(self, pos, ctx, values):
         pl = plectoneme_summary(pos[self.c])

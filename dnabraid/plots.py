@@ -82,3 +82,133 @@ def knot_plot(x, summary: dict, path: str) -> str:
                  fontsize=10)
     fig.tight_layout()
     return _save(fig, path, 110)
+
+
+def sweep_plot(spec, rows: list[dict], path: str) -> str | None:
+    """One figure per sweep, from the scene's result columns (PNG).
+
+    A scene with several rows per point (tweezer scenes: one per turn value) gives one
+    curve per point of its second result column against its first (extension against
+    turns); a scene with one row per point (the knot scene) gives its first varying result
+    column against the first numeric grid key, one curve per value of the other keys, with
+    its theory column dashed where the scene gives one. Error bars come from the matching
+    ``_sem`` column. If the rows hold +n and -n turns and the sweep varies ``alpha`` (or
+    has more than one point), a second panel shows the asymmetry z(+n) - z(-n)
+    (:func:`dnabraid.analysis.handedness.asymmetry`) against the swept key (``alpha`` if
+    swept, else the first numeric grid key).
+
+    Parameters
+    ----------
+    spec : dnabraid.sweep.SweepSpec
+        The sweep (its grid, points and the scene's result columns).
+    rows : list of dict
+        The gathered rows (:func:`dnabraid.sweep.gather`).
+    path : str
+        Where to write the figure (written atomically).
+
+    Returns
+    -------
+    str or None
+        ``path``, or None when no point finished or no result column is numeric.
+    """
+    from matplotlib.figure import Figure
+
+    from .analysis.handedness import asymmetry
+    from .sweep.gather import is_number, sem_column
+    from .sweep.spec import format_value
+
+    keys = list(spec.grid)
+    done = [r for r in rows if r["status"] == "done"]
+    if not done:
+        return None
+    cols = spec.row_columns
+    sem_cols = {s for c in cols if (s := sem_column(c, cols))}
+    numeric = [c for c in cols if c not in sem_cols
+               and all(is_number(r.get(c)) for r in done)]
+    counts: dict = {}
+    for r in done:
+        counts[r["point"]] = counts.get(r["point"], 0) + 1
+    per_point = max(counts.values()) > 1
+    num_keys = [k for k in spec.grid if all(is_number(v) for v in spec.grid[k])]
+    if per_point and numeric:
+        xcol = numeric[0]
+    else:
+        xcol = num_keys[0] if num_keys else None
+    ycands = [c for c in numeric if c != xcol]
+    varying = [c for c in ycands if len({r[c] for r in done}) > 1]
+    ycol = (varying or ycands or [None])[0]
+    if ycol is None:
+        return None
+    asym = asymmetry(rows, keys)
+    akey = "alpha" if "alpha" in keys else (num_keys[0] if num_keys else None)
+    show_asym = bool(asym) and akey is not None and ("alpha" in keys or len(asym) > 1)
+    ncol = 2 if show_asym else 1
+    fig = Figure(figsize=(5.2 * ncol, 3.9))
+    axes = fig.subplots(1, ncol, squeeze=False)
+    ax = axes[0, 0]
+    ysem = sem_column(ycol, cols)
+    # a theory column beside the measured one (knot: radius_apex_nm, radius_theory_nm)
+    theory = next((c for c in numeric if "theory" in c and c != ycol
+                   and c.split("_")[0] == ycol.split("_")[0]), None)
+
+    def bars(rs):
+        return [(r.get(ysem) or 0) if ysem else 0 for r in rs]
+
+    if per_point:
+        for i, p in enumerate(spec.points):
+            rs = sorted((r for r in done if r["point"] == p.name), key=lambda r: r[xcol])
+            if not rs:
+                continue
+            label = ", ".join(f"{k}={format_value(v)}" for k, v in p.values.items())
+            ax.errorbar([r[xcol] for r in rs], [r[ycol] for r in rs], yerr=bars(rs), fmt="o-",
+                        ms=3, capsize=2, label=label, color=f"C{i % 10}")
+    else:
+        others = [k for k in keys if k != xcol]
+        groups: dict = {}
+        for r in done:
+            groups.setdefault(tuple(format_value(r[k]) for k in others), []).append(r)
+        for j, (g, rs) in enumerate(groups.items()):
+            if xcol is None:
+                xs = [spec.points.index(next(p for p in spec.points if p.name == r["point"]))
+                      for r in rs]
+            else:
+                rs.sort(key=lambda r: r[xcol])
+                xs = [r[xcol] for r in rs]
+            label = ", ".join(f"{k}={v}" for k, v in zip(others, g)) or None
+            ax.errorbar(xs, [r[ycol] for r in rs], yerr=bars(rs), fmt="o-", ms=3, capsize=2,
+                        label=label, color=f"C{j % 10}")
+            if theory:
+                ax.plot(xs, [r[theory] for r in rs], "--", color=f"C{j % 10}", lw=1,
+                        label=f"{theory}" + (f" ({label})" if label else ""))
+    ax.set_xlabel(xcol or "point")
+    ax.set_ylabel(ycol)
+    if ax.get_legend_handles_labels()[1]:
+        ax.legend(fontsize=7, frameon=False)
+    if show_asym:
+        ax2 = axes[0, 1]
+        others = [k for k in keys if k != akey]
+        agroups: dict = {}
+        for a in asym:
+            agroups.setdefault(tuple(format_value(a[k]) for k in others), []).append(a)
+        for j, (g, items) in enumerate(agroups.items()):
+            items.sort(key=lambda a: a[akey])
+            label = ", ".join(f"{k}={v}" for k, v in zip(others, g)) or None
+            ax2.errorbar([a[akey] for a in items], [a["asymmetry_nm"] for a in items],
+                         yerr=[a["asymmetry_sem_nm"] for a in items], fmt="s-", capsize=2,
+                         label=label, color=f"C{j % 10}")
+        ax2.axhline(0, color="0.7", lw=0.8)
+        ns = sorted({a["n"] for a in asym})
+        ax2.set_xlabel(akey)
+        xs = [a[akey] for a in asym]
+        if akey == "salt_mM" and min(xs) > 0 and max(xs) >= 10 * min(xs):
+            ax2.set_xscale("log")
+        ax2.set_ylabel(f"z(+n) - z(-n) (nm), n = {', '.join(f'{n:g}' for n in ns)}")
+        if any(g for g in agroups):
+            ax2.legend(fontsize=7, frameon=False)
+    fig.suptitle(f"sweep {os.path.basename(os.path.normpath(spec.out))}: scene "
+                 f"{spec.points[0].scene.name}", fontsize=9)
+    fig.tight_layout()
+    tmp = path + ".tmp.png"
+    fig.savefig(tmp, dpi=110, format="png")
+    os.replace(tmp, path)
+    return path

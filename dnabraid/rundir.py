@@ -15,12 +15,13 @@ import sys
 import numpy as np
 
 from . import tomlio
+from .errors import UserError
 
 __all__ = ["RunDirError", "Summary", "atomic_write_bytes", "atomic_write_text",
            "prepare_out_dir", "versions", "write_summary", "write_topology"]
 
 
-class RunDirError(ValueError):
+class RunDirError(UserError):
     """The output directory cannot take this run (it holds something else)."""
 
 
@@ -93,7 +94,7 @@ def write_topology(path: str, topology, positions_nm) -> None:
 
 @dataclasses.dataclass
 class Summary:
-    """The schema of a tweezer run's ``summary.json`` (all fields are written).
+    """The schema of a thermal run's ``summary.json`` (all fields are written).
 
     Attributes
     ----------
@@ -127,6 +128,9 @@ class Summary:
     seed : int
         The scene's seed and ``integrator_seed``, the seed OpenMM was given.
     integrator_seed : int
+    columns : dict
+        Per observable column: ``unit``, ``meaning``, ``reported`` (a result: in the table,
+        the sweep rows and the plots) and ``verdict`` (decides convergence).
     """
 
     scene: dict
@@ -148,6 +152,7 @@ class Summary:
     points: list
     seed: int = 0
     integrator_seed: int = 0
+    columns: dict = dataclasses.field(default_factory=dict)
 
     def to_dict(self) -> dict:
         return dataclasses.asdict(self)

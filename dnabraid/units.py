@@ -23,6 +23,8 @@ PN_NM_IN_KJ_MOL = 1e-21 * AVOGADRO / 1e3  # = 0.602214...
 PN_NS_PER_NM_IN_AMU_PER_PS = 1e-12 / (1.66053906660e-27 / 1e-12)  # = 602.214...
 #: Viscosity of water at 25 C in pN ns / nm^2 (0.89 mPa s).
 WATER_VISCOSITY_PN_NS_NM2 = 0.89
+#: One turn in radians (every module that converts turns to angles uses this one).
+TWO_PI = 2.0 * math.pi
 
 
 def kT(temperature_K: float) -> float:

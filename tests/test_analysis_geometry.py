@@ -41,7 +41,7 @@ def test_pair_solid_angle_matches_quadrature():
     s = (np.arange(1500) + 0.5) / 1500
     for _ in range(5):
         a, b, c, d = rng.normal(size=(4, 3))
-        exact = g._pair_solid_angles(a, b, c, d) / (4 * np.pi)
+        exact = g.pair_solid_angles(a, b, c, d) / (4 * np.pi)
         x1 = a + s[:, None] * (b - a)
         x2 = c + s[:, None] * (d - c)
         r = x1[:, None, :] - x2[None, :, :]

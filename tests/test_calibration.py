@@ -30,12 +30,11 @@ def test_tether_error_bars_cover_the_exact_extension(tmp_path):
     d = s0.dna()
     exact = discrete_wlc_exact(s0.force_pN, s0.n_beads - 1, s0.bead_spacing_nm, d.kappa_kT,
                                d.kT, stretch_k_pN_per_nm=d.k_bond)["extension_nm"]
-    covered, t, verdicts = 0, [], []
+    covered, t = 0, []
     for k in range(STUDIES):
         s = make_scene("tether", dict(base, seed=100 + k))
         pt = s.run(str(tmp_path / f"s{k}"))["points"][0]
         ext = pt["extension_nm"]
-        verdicts.append(pt["converged"])
         covered += abs(ext["mean"] - exact) <= ext["ci_halfwidth"]
         t.append((ext["mean"] - exact) / ext["sem"])
     # binomial(12, 0.95): P(covered <= 8) = 0.2 %; the check fails for badly wrong errors
@@ -45,8 +44,31 @@ def test_tether_error_bars_cover_the_exact_extension(tmp_path):
     assert p > 0.01, (p, t)
     assert math.isfinite(exact) and exact == pytest.approx(22.6, abs=0.5)
     assert np.all(np.isfinite(t))
-    # exact starts: the verdict needs no R-hat/ESS, and these calibrated points pass it
-    assert all(verdicts), verdicts
+
+
+def test_verdict_rule_flags_replicas_that_did_not_move():
+    """Four replicas each stuck near its own value (a slow mode none of them samples).
+    Without exact starts (wall on: the relaxed R-hat/ESS rule) the verdict must say
+    'not converged' by R-hat. With exact starts the replicas are independent draws, so the
+    verdict asks no R-hat and the error bar is the scatter of the replica means: the
+    stuck replicas then show up as a large sem, not as a failed verdict. Fewer than four
+    samples per replica fail either rule."""
+    base = {"force_pN": 3.0, "length_nm": 25.0, "self_avoidance": False, "replicas": 4}
+    exact = make_scene("tether", dict(base, surface=False))
+    walled = make_scene("tether", dict(base, surface=True))
+    rng = np.random.default_rng(7)
+    stuck = [float(r) + 0.01 * rng.normal(size=400) for r in range(4)]
+    w = walled.summarise(stuck)
+    assert not w["converged"] and "R-hat" in w["reason"], w["reason"]
+    assert w["rhat"] > 10.0  # measured ~ inf-like: between-replica spread 100x the within
+    e = exact.summarise(stuck)
+    assert e["converged"], e["reason"]
+    means = [x.mean() for x in stuck]
+    assert e["sem"] == pytest.approx(np.std(means, ddof=1) / 2, rel=1e-12)
+    assert e["sem"] == pytest.approx(math.sqrt(5 / 3) / 2, rel=0.05)  # std of 0, 1, 2, 3
+    for scene in (exact, walled):
+        short = scene.summarise([x[:3] for x in stuck])
+        assert not short["converged"] and "samples" in short["reason"], short["reason"]
 
 
 @pytest.mark.parametrize("target, max_replicas, stopped_by", [(0.6, 16, "target"),

@@ -54,7 +54,7 @@ def _energy(model, pos, groups=None):
 def _contact_positions(m, gap=1.05, tilt=0.6):
     """The model's start with ring 2 (and its side particles) translated so that its bead
     nearest ring 1 sits ``gap`` diameters from ring 1's nearest bead (chiral contact)."""
-    r1, r2 = m.extra["rings"]
+    r1, r2 = m.rings
     x = m.positions.copy()
     d = np.linalg.norm(x[r1][:, None] - x[r2][None], axis=-1)
     i, j = np.unravel_index(np.argmin(d), d.shape)
@@ -62,7 +62,7 @@ def _contact_positions(m, gap=1.05, tilt=0.6):
     # tilt ring 2 about the line of centres by `tilt` rad: a 90 deg crossing (the start's)
     # has no chiral energy (apolar fold)
     k = sep / np.linalg.norm(sep)
-    both = np.r_[r2, m.extra["ring_sides"][1]]
+    both = np.r_[r2, m.ring_sides[1]]
     v = x[both] - x[r2[j]]
     c, s = np.cos(tilt), np.sin(tilt)
     x[both] = x[r2[j]] + c * v + s * np.cross(k, v) + (1 - c) * np.outer(v @ k, k)
@@ -120,7 +120,12 @@ def test_catenane_run_conserves_topology_and_mda_agrees(tmp_path):
     for k in (1, 2):
         assert pt[f"twist_{k}"]["mean"] + pt[f"writhe_{k}"]["mean"] == pytest.approx(-1.0,
                                                                                       abs=1e-9)
-    assert pt["handedness"] in ("right", "left", "undetermined", "no contact")
+    # one replica has no between-replica error, so the handedness cannot be called: it is
+    # 'undetermined' when the rings touched, 'no contact' when they never did
+    eta = pt["braid_angle_rad"]
+    assert eta["sem"] is None
+    assert pt["handedness"] == ("no contact" if eta["mean"] is None else "undetermined")
+    assert (eta["mean"] is None) == (pt["contact_fraction"]["mean"] == 0.0)
 
     uni = mda.Universe(os.path.join(out, "topology.pdb"), os.path.join(out, "trajectory.dcd"))
     rings, sides = select_rings(uni)
@@ -143,6 +148,18 @@ def test_catenane_run_conserves_topology_and_mda_agrees(tmp_path):
         assert w.results.writhe[i] == pytest.approx(float(rows[i]["writhe_1"]), abs=TOL_DCD)
 
 
+def test_handedness_is_called_two_standard_errors_from_zero():
+    """The mean braid angle (< 0 right-handed) names a hand only when it lies more than two
+    standard errors from 0; otherwise 'undetermined', and 'no contact' without contacts."""
+    call = type(make_scene("catenane", SMALL)).handedness
+    assert call({"mean": -0.3, "sem": 0.1}) == "right"
+    assert call({"mean": 0.3, "sem": 0.1}) == "left"
+    assert call({"mean": -0.19, "sem": 0.1}) == "undetermined"
+    assert call({"mean": 0.19, "sem": 0.1}) == "undetermined"
+    assert call({"mean": 0.3, "sem": None}) == "undetermined"
+    assert call({"mean": None, "sem": None}) == "no contact"
+
+
 def test_model_is_mirror_symmetric_with_alpha_and_delta_lk_reversed():
     """E_{alpha}(x) = E_{-alpha}(M x) for a mirror M (z -> -z), every term included: bonds,
     bending, WCA and twist are achiral (omega -> -omega, energy in omega^2), the chiral
@@ -153,7 +170,7 @@ def test_model_is_mirror_symmetric_with_alpha_and_delta_lk_reversed():
     b = make_scene("catenane", {**SMALL, "alpha": -1.5, "delta_lk": 1, "link": -1})
     ma, mb = a.build(), b.build()
     rng = np.random.default_rng(4)
-    r1, r2 = ma.extra["rings"]
+    r1, r2 = ma.rings
     x = _contact_positions(ma) + rng.normal(0, 0.15, ma.positions.shape)
     mirror = x * np.array([1.0, 1.0, -1.0])
     g = {ma.forces["chiral"]}
@@ -164,9 +181,9 @@ def test_model_is_mirror_symmetric_with_alpha_and_delta_lk_reversed():
     assert abs(ea_chiral) > 1e-3
     assert eb_chiral == pytest.approx(-ea_chiral, rel=1e-9)
     pa, pb = ma.positions, mb.positions
-    for k, (r, sd) in enumerate(zip(ma.extra["rings"], ma.extra["ring_sides"])):
+    for k, (r, sd) in enumerate(zip(ma.rings, ma.ring_sides)):
         lka = ring_twist(pa[r], pa[sd]) + writhe(pa[r])
-        rb, sb = mb.extra["rings"][k], mb.extra["ring_sides"][k]
+        rb, sb = mb.rings[k], mb.ring_sides[k]
         lkb = ring_twist(pb[rb], pb[sb]) + writhe(pb[rb])
         assert lka == pytest.approx(-1.0, abs=TOL_LK) and lkb == pytest.approx(1.0, abs=TOL_LK)
     assert gauss_linking_number(pa[r1], pa[r2]) == pytest.approx(1.0, abs=1e-9)
@@ -178,7 +195,7 @@ def test_chiral_energy_of_a_contact_flips_under_the_mirror():
     odd under the mirror at fixed alpha."""
     s = make_scene("catenane", {**SMALL, "alpha": 1.5})
     m = s.build()
-    r1, r2 = m.extra["rings"]
+    r1, r2 = m.rings
     x = _contact_positions(m)
     from dnabraid.scenes.catenane import ChiralEnergy
 
@@ -196,11 +213,11 @@ def test_contact_start_is_linked_and_near_contact(link):
     m = make_scene("catenane", {**SMALL, "start": "contact", "link": link,
                                 "delta_lk": 1}).build()
     p = m.positions
-    r1, r2 = m.extra["rings"]
+    r1, r2 = m.rings
     assert gauss_linking_number(p[r1], p[r2]) == pytest.approx(link, abs=1e-9)
     dmin = np.linalg.norm(p[r1][:, None] - p[r2][None], axis=-1).min()
     assert 1.3 * m.dna.diameter_nm <= dmin < 1.3 * m.dna.diameter_nm + 0.5 * 3.0
-    for r, sd in zip(m.extra["rings"], m.extra["ring_sides"]):
+    for r, sd in zip(m.rings, m.ring_sides):
         assert ring_twist(p[r], p[sd]) + writhe(p[r]) == pytest.approx(1.0, abs=TOL_LK)
 
 

@@ -1,7 +1,7 @@
 """Closed braids (scene ``closed``): energy twins, start topology, Newton relaxation against the
 continuum closed ply, and the scene's refusals.
 
-Continuum: :mod:`dnabraid.continuum.closed` (uniform closed ply with the axis-curvature
+Continuum: :mod:`dnabraid.continuum.closed_ply` (uniform closed ply with the axis-curvature
 correction: eta_mean to O(eps^2), mean pressure by virtual work on the torus family, writhe
 per ring). Seed: van der Heijden, "Equilibrium theory of elastic braids" (seed 000), slides
 19-23.
@@ -12,7 +12,7 @@ import math
 import numpy as np
 import pytest
 
-from dnabraid import closed as C
+from dnabraid.statics import closed_braid as C
 from dnabraid import scenes as scn
 from dnabraid.forces import reference as ref
 from dnabraid.geometry.curves import gauss_linking_number, writhe
@@ -122,7 +122,7 @@ def test_start_is_the_torus_link_with_strands_of_length_L(n, hand, sign):
 
 
 def test_knot_start_has_the_continuum_writhe():
-    from dnabraid.continuum import closed as cc
+    from dnabraid.continuum import closed_ply as cc
 
     br = C.ClosedBraid(topology="knot", n=3, spacing_over_radius=1.0, start_noise=0.0)
     (ring,) = C.initial_geometry(br)
@@ -146,7 +146,7 @@ def test_relaxed_2link_against_the_continuum_closed_ply():
     # braid angle against the relaxed continuum ply (an independent equilibrium, Fourier
     # modes; 0.252507): measured 0.252523. 1e-4 excludes the uniform ply's 2 theta =
     # 0.251994 and the torus helix's 0.252490 is within it
-    from dnabraid.continuum import closed as cc
+    from dnabraid.continuum import closed_ply as cc
 
     relaxed = cc.relax_closed_ply(2, 0.02, "link").values
     assert r["eta_mean"] == pytest.approx(relaxed["eta_mean_rad"], abs=1e-4)
@@ -212,7 +212,7 @@ def test_cli_run_closed_writes_a_self_describing_result(tmp_path, capsys):
     assert set(s.rows(summary)[0]) == set(s.row_columns)
     data = np.load(out / "closed.npz")
     assert data["pressure"].shape == data["eta"].shape == (s.braid().beads_per_strand,)
-    # the continuum column is there (dnabraid.continuum.closed)
+    # the continuum column is there (dnabraid.continuum.closed_ply)
     assert "eta_mean_rad" in summary["continuum"]["continuum"]
 
 
@@ -240,7 +240,7 @@ def test_scene_keys_and_refusals():
 
 def test_uniform_ply_formulas():
     # sin theta = pi n Delta / L; p = B sin^4 / r^3 against the continuum module's Eq. (2)
-    from dnabraid.continuum import closed as cc
+    from dnabraid.continuum import closed_ply as cc
 
     s = C.uniform_sin_theta("link", 4, 0.02)
     assert math.asin(s) == pytest.approx(cc.closed_ply_angle(4, 0.02, "link"), rel=1e-12)

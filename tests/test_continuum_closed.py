@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 
 from dnabraid.cli import main
-from dnabraid.continuum import closed as cc
+from dnabraid.continuum import closed_ply as cc
 from dnabraid.continuum import ply
 from dnabraid.geometry.curves import crossing_angles, gauss_linking_number, writhe
 

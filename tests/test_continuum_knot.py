@@ -9,10 +9,10 @@ import math
 import numpy as np
 import pytest
 
-from dnabraid.continuum import knot
+from dnabraid.continuum import knot_braid
 
 # Tolerances: a single solve at the default spacing dw = 0.005 carries an O(dw) error
-# (smooth trend + node-phase oscillation, see knot.solve_knot_averaged): measured spread
+# (smooth trend + node-phase oscillation, see knot_braid.solve_knot_averaged): measured spread
 # of w_c over grid phases +-5e-4, trend -3e-4 (w_c), -2e-4 (sigma).  The converged values
 # (Richardson of nested meshes dw = 0.005/0.0025 | of phase means at 0.01/0.005) are
 # w_c = 3.5056|3.5059, contact 0.3497|0.3483, gap 0.0214|0.0215 at 1.8223|1.8228,
@@ -21,12 +21,12 @@ from dnabraid.continuum import knot
 
 @pytest.fixture(scope="module")
 def trefoil():
-    return knot.solve_knot(1)
+    return knot_braid.solve_knot(1)
 
 
 @pytest.fixture(scope="module")
 def trefoil_coarse():
-    return knot.solve_knot(1, n_grid=500)  # dw ~ 0.01, W default
+    return knot_braid.solve_knot(1, n_grid=500)  # dw ~ 0.01, W default
 
 
 def test_trefoil_converges(trefoil):
@@ -85,8 +85,8 @@ def test_trefoil_mesh_trend(trefoil, trefoil_coarse):
 
 def test_independent_of_W():
     # same spacing 0.01 and node positions, different domain: identical solution
-    a = knot.solve_knot(1, n_grid=450, half_width_W=4.5)
-    b = knot.solve_knot(1, n_grid=600, half_width_W=6.0)
+    a = knot_braid.solve_knot(1, n_grid=450, half_width_W=4.5)
+    b = knot_braid.solve_knot(1, n_grid=600, half_width_W=6.0)
     assert a.success and b.success
     for key in ("w_c", "sigma", "contact_half_width", "max_gap", "isolated_contact_at"):
         assert a[key] == pytest.approx(b[key], abs=1e-6), key
@@ -95,9 +95,9 @@ def test_independent_of_W():
 
 
 def test_continuation_refines_mesh():
-    coarse = knot.solve_knot(1, n_grid=225, half_width_W=4.5)
-    fine = knot.solve_knot(1, n_grid=450, half_width_W=4.5, initial=coarse)
-    direct = knot.solve_knot(1, n_grid=450, half_width_W=4.5)
+    coarse = knot_braid.solve_knot(1, n_grid=225, half_width_W=4.5)
+    fine = knot_braid.solve_knot(1, n_grid=450, half_width_W=4.5, initial=coarse)
+    direct = knot_braid.solve_knot(1, n_grid=450, half_width_W=4.5)
     assert fine.success
     assert fine["w_c"] == pytest.approx(direct["w_c"], abs=1e-6)
     assert fine["sigma"] == pytest.approx(direct["sigma"], abs=1e-6)
@@ -107,10 +107,10 @@ def test_cinquefoil_crossing():
     # seed 002: 7.640; seed 001 (Jawed et al.) quotes 7.60.  Converged: 7.640 +- 0.001
     # (nested meshes 7.6388, 7.6407, 7.6398, 7.6402 at dw = 0.02 ... 0.0025; phase means
     # 7.6402 and 7.6407 at dw = 0.02, 0.01): seed 002 is right, 7.60 is 0.04 too small.
-    res = knot.solve_knot(2, n_grid=int(round(knot.default_half_width(2) / 0.01)))
+    res = knot_braid.solve_knot(2, n_grid=int(round(knot_braid.default_half_width(2) / 0.01)))
     assert res.success, res.message
-    assert res["w_c"] == pytest.approx(knot.W_C_CINQUEFOIL, abs=3e-3)
-    assert abs(res["w_c"] - knot.W_C_CINQUEFOIL_SEED001) > 0.03
+    assert res["w_c"] == pytest.approx(knot_braid.W_C_CINQUEFOIL, abs=3e-3)
+    assert abs(res["w_c"] - knot_braid.W_C_CINQUEFOIL_SEED001) > 0.03
     # same contact topology, wider central contact (seed text)
     assert res["contact_half_width"] > 4.0
     assert res["max_gap"] == pytest.approx(0.021, abs=1e-3)
@@ -119,11 +119,11 @@ def test_cinquefoil_crossing():
 
 def test_barrier_fallback_agrees(monkeypatch):
     # when the active-set iteration cycles the interior-point point is kept: same numbers
-    exact = knot.solve_knot(1, n_grid=450, half_width_W=4.5)
-    orig = knot._active_set
-    monkeypatch.setattr(knot, "_active_set",
+    exact = knot_braid.solve_knot(1, n_grid=450, half_width_W=4.5)
+    orig = knot_braid._active_set
+    monkeypatch.setattr(knot_braid, "_active_set",
                         lambda grid, y, a, f, x, max_outer=60: orig(grid, y, a, f, x, 0))
-    fallback = knot.solve_knot(1, n_grid=450, half_width_W=4.5)
+    fallback = knot_braid.solve_knot(1, n_grid=450, half_width_W=4.5)
     assert exact.values["final_stage"] == "active_set"
     assert fallback.success and fallback.values["final_stage"] == "barrier"
     for key, tol in (("w_c", 1e-5), ("sigma", 1e-4), ("max_gap", 1e-5),
@@ -132,14 +132,12 @@ def test_barrier_fallback_agrees(monkeypatch):
 
 
 def test_large_n_returns_result():
-    res = knot.solve_knot(3, n_grid=int(round(knot.default_half_width(3) / 0.02)))
-    assert isinstance(res, knot.ContinuumResult)
-    assert res.message
-    if res.success:  # w_c(n) = 3.506 + 4.135 (n - 1) (11.775 at dw = 0.005)
-        assert res["w_c"] == pytest.approx(3.506 + 2 * 4.135, abs=0.01)
-        assert res["sigma"] == pytest.approx(0.492 + 2 * 0.975, abs=0.01)
-    else:
-        assert res.status != 0
+    res = knot_braid.solve_knot(3, n_grid=int(round(knot_braid.default_half_width(3) / 0.02)))
+    assert isinstance(res, knot_braid.ContinuumResult)
+    assert res.success and res.status == 0, res.message
+    # w_c(n) = 3.506 + 4.135 (n - 1) (11.775 at dw = 0.005)
+    assert res["w_c"] == pytest.approx(3.506 + 2 * 4.135, abs=0.01)
+    assert res["sigma"] == pytest.approx(0.492 + 2 * 0.975, abs=0.01)
 
 
 @pytest.mark.parametrize("kwargs", [{"n": 0}, {"n": -1}, {"n": 1.5}, {"n": True},
@@ -152,16 +150,16 @@ def test_large_n_returns_result():
 def test_bad_input(kwargs):
     n = kwargs.pop("n")
     with pytest.raises(ValueError):
-        knot.solve_knot(n, **kwargs)
+        knot_braid.solve_knot(n, **kwargs)
 
 
 # ----------------------------------------------------------------------- tension law
 def test_frictionless_tension_is_eq1():
     EI, h = 4.1 * 50.0, 1.0
     for R in (10.0, 100.0, 1234.5):
-        T = knot.tension_from_radius(R, thickness=h, bending_stiffness=EI)
+        T = knot_braid.tension_from_radius(R, thickness=h, bending_stiffness=EI)
         assert T == pytest.approx(EI / (2 * R**2), rel=1e-14)  # Eq. 1
-        assert knot.radius_from_tension(T, thickness=h, bending_stiffness=EI) == \
+        assert knot_braid.radius_from_tension(T, thickness=h, bending_stiffness=EI) == \
             pytest.approx(R, rel=1e-10)
 
 
@@ -169,47 +167,47 @@ def test_tension_law_branches_and_inverse():
     EI, h, mu = 2.0, 0.5, 0.07
     R = 40.0
     eps = math.sqrt(h / R)
-    up = knot.tension_from_radius(R, thickness=h, bending_stiffness=EI, mu=mu)
-    down = knot.tension_from_radius(R, thickness=h, bending_stiffness=EI, mu=mu,
+    up = knot_braid.tension_from_radius(R, thickness=h, bending_stiffness=EI, mu=mu)
+    down = knot_braid.tension_from_radius(R, thickness=h, bending_stiffness=EI, mu=mu,
                                     tightening=False)
     assert up * h**2 / EI == pytest.approx(eps**4 / 2 + mu * 0.492 * eps**3)  # Eq. 8
     assert down * h**2 / EI == pytest.approx(eps**4 / 2 - mu * 0.492 * eps**3)
     for T, tight in ((up, True), (down, False)):
-        assert knot.radius_from_tension(T, thickness=h, bending_stiffness=EI, mu=mu,
+        assert knot_braid.radius_from_tension(T, thickness=h, bending_stiffness=EI, mu=mu,
                                         tightening=tight) == pytest.approx(R, rel=1e-9)
 
 
 def test_friction_lock():
-    sigma = knot.SIGMA_TREFOIL
+    sigma = knot_braid.SIGMA_TREFOIL
     assert 1 / (2 * sigma) == pytest.approx(1.02, abs=5e-3)  # Eq. 9's 1.02
-    assert knot.friction_from_lock(1.0) == pytest.approx(1 / (2 * sigma))
+    assert knot_braid.friction_from_lock(1.0) == pytest.approx(1 / (2 * sigma))
     mu = 0.07
-    eps0 = knot.lock_epsilon(mu)
+    eps0 = knot_braid.lock_epsilon(mu)
     assert eps0 == pytest.approx(2 * mu * sigma)
-    assert knot.friction_from_lock(eps0) == pytest.approx(mu)
+    assert knot_braid.friction_from_lock(eps0) == pytest.approx(mu)
     # loosening tension vanishes at the lock (Eq. 8 -> Eq. 9)
-    assert knot.scaled_tension(eps0, mu, tightening=False) == pytest.approx(0.0, abs=1e-15)
-    assert knot.epsilon_from_scaled_tension(0.0, mu, tightening=False) == pytest.approx(eps0)
+    assert knot_braid.scaled_tension(eps0, mu, tightening=False) == pytest.approx(0.0, abs=1e-15)
+    assert knot_braid.epsilon_from_scaled_tension(0.0, mu, tightening=False) == pytest.approx(eps0)
     with pytest.raises(ValueError):
-        knot.epsilon_from_scaled_tension(-1.0, mu, tightening=False)
+        knot_braid.epsilon_from_scaled_tension(-1.0, mu, tightening=False)
     with pytest.raises(ValueError):
-        knot.epsilon_from_scaled_tension(0.0, mu, tightening=True)
+        knot_braid.epsilon_from_scaled_tension(0.0, mu, tightening=True)
 
 
 def test_braid_length_eq7():
-    assert knot.braid_length(100.0, 1.0) == pytest.approx(2 * 3.506 * math.sqrt(200.0))
-    assert knot.braid_length(100.0, 1.0, w_c=knot.W_C_CINQUEFOIL) == \
+    assert knot_braid.braid_length(100.0, 1.0) == pytest.approx(2 * 3.506 * math.sqrt(200.0))
+    assert knot_braid.braid_length(100.0, 1.0, w_c=knot_braid.W_C_CINQUEFOIL) == \
         pytest.approx(2 * 7.640 * math.sqrt(200.0))
     with pytest.raises(ValueError):
-        knot.braid_length(-1.0, 1.0)
+        knot_braid.braid_length(-1.0, 1.0)
 
 
 # ----------------------------------------------------------------------- CLI
 def test_cli_roundtrip():
     parser = argparse.ArgumentParser()
-    knot.cli_add_arguments(parser)
+    knot_braid.cli_add_arguments(parser)
     args = parser.parse_args(["--n", "1", "--n-grid", "250"])
-    out = knot.cli_run(args)
+    out = knot_braid.cli_run(args)
     json.dumps(out)
     for key in ("w_c", "sigma", "contact_half_width", "max_gap", "max_gap_at",
                 "isolated_contact_at", "success", "wall_time_s"):
@@ -221,7 +219,7 @@ def test_cli_roundtrip():
 
 @pytest.mark.slow
 def test_convergence_table():
-    rows = knot.convergence_table()
+    rows = knot_braid.convergence_table()
     assert len(rows) == 5 and all(r["success"] for r in rows)
     errs = [r["error_w_c"] for r in rows[:-1]]
     assert all(a > b for a, b in zip(errs, errs[1:]))  # monotone first-order convergence
@@ -237,7 +235,7 @@ def test_convergence_table():
 @pytest.mark.slow
 def test_phase_averaged_cinquefoil():
     # phase means at dw = 0.01, 0.005 (10 shifts each), extrapolated: 7.640 +- 0.002
-    res = knot.solve_knot_averaged(2, spacings=(0.01, 0.005), n_shifts=10)
+    res = knot_braid.solve_knot_averaged(2, spacings=(0.01, 0.005), n_shifts=10)
     assert res.success
     assert res["w_c"] == pytest.approx(7.640, abs=2.5e-3)
     assert abs(res["w_c"] - 7.60) > 0.035

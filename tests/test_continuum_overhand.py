@@ -260,17 +260,32 @@ def test_very_small_e_outside_model_or_table():
     # tighter than the table: status 3 with a reason
     r = oh.solve_overhand(0.5 * H, 3, H, B, MU)
     assert not r.success and r.status == 3 and "exceeds" in r.message
-    # the closed form reaches further; R <= h is flagged as outside the model
+    # the closed form reaches further: at e = 2h, n = 1 it solves Eq. (5), but the loop
+    # radius R = g e/x^2 comes out ~0.007 h <= h: outside the model (status 3)
     r = oh.solve_overhand(2 * H, 1, H, B, MU, method="elliptic")
-    assert r.success or r.status == 3
+    assert not r.success and r.status == 3 and "outside the model" in r.message
+    v = r.values
+    G = 8 * math.sqrt(3) * math.pi**2 * H / (2 * H)  # Eq. (5): g = 8 sqrt(3) pi^2 n^2 h/e
+    assert v["g"] == pytest.approx(G, rel=TOL_EXACT)
+    assert oh.g_closed_form(v["x_ell_over_R"]) == pytest.approx(G, rel=TOL_ROOT)
+    assert v["R"] == pytest.approx(G * 2 * H / v["x_ell_over_R"] ** 2, rel=TOL_EXACT)
+    assert v["R"] < H and v["eps"] == pytest.approx(math.sqrt(H / v["R"]), rel=TOL_EXACT)
     r = oh.solve_overhand(1e-4 * H, 10, H, B, MU, method="elliptic")
     assert not r.success and r.status == 3
 
 
 def test_large_n():
+    # n = 40 at e = 0.5 m: g = 8 sqrt(3) pi^2 n^2 h/e = 55.6 lies inside the table, and
+    # R = 2.1 mm > h (eps = 0.25): converged, with the closed form's F
     r = oh.solve_overhand(0.5, 40, H, B, MU)
     assert isinstance(r, ContinuumResult)
-    assert r.success or r.status == 3
+    assert r.success and r.status == 0, r.message
+    assert r.values["g"] == pytest.approx(8 * math.sqrt(3) * math.pi**2 * 1600 * H / 0.5,
+                                          rel=TOL_EXACT)
+    assert r.values["eps"] < 1.0
+    ref = oh.solve_overhand(0.5, 40, H, B, MU, method="elliptic")
+    assert ref.success
+    assert r.values["F"] == pytest.approx(ref.values["F"], rel=TOL_TABLE_G)
     r = oh.solve_overhand(1e5, 1000, H, B, MU)
     assert r.success, r.message
     r = oh.solve_overhand(0.5, 1000, H, B, MU)
@@ -327,4 +342,3 @@ def test_convergence_table():
     assert bvp[-1]["error"] < 1e-12 and bvp[0]["error"] > bvp[-1]["error"]
     tab = [r["error"] for r in rows if r["problem"] == "g_table"]
     assert tab == sorted(tab, reverse=True) and tab[-1] < 1e-6
-    assert sum(r["wall_time_s"] for r in rows) < 60

@@ -140,8 +140,7 @@ def test_bvp_failures_are_data():
     res = ply.solve_ply_bvp(100.0, 2.0, DELTA, ply_link=10.0)  # needs theta > 45 deg
     assert not res.success and res.status == 3
     res = ply.solve_ply_bvp(500.0, 2.0, DELTA, torque_pN_nm=1e4, max_nodes=2000)
-    assert not res.success and res.status in (1, 2, 3, 4)
-    assert res.message
+    assert not res.success and res.status == 3 and "lock-up" in res.message
 
 
 @pytest.mark.parametrize("kwargs", [{"force_pN": -1.0}, {"delta_nm": 0.0},
@@ -170,7 +169,6 @@ def test_convergence_table_error_decreases():
     assert all(r["success"] for r in rows)
     assert bvp[-1]["error"] < 1e-8 < bvp[0]["error"]
     assert bvp[-1]["mesh_nodes"] > bvp[0]["mesh_nodes"]
-    assert sum(r["wall_time_s"] for r in rows) < 30.0
 
 
 def test_cli_roundtrip():

@@ -83,24 +83,26 @@ def test_chiral_energy_first_order_and_mirror():
     assert asym["delta_z_nm"] != 0.0
 
 
-@pytest.mark.parametrize("kwargs", [
-    {"turns": 44.9}, {"turns": 200.0},  # more turns than fit below lock-up
-    {"alpha_pN": 100.0}, {"alpha_pN": 1e4},  # chiral drive to lock-up
-    {"force_pN": 1e-8}, {"force_pN": 1e-4}, {"force_pN": 1e6},  # tension extremes
-    {"turns": 44.0}, {"turns": -44.0, "alpha_pN": 100.0},  # near lock-up
+@pytest.mark.parametrize("kwargs, status, says", [
+    ({"turns": 44.9}, 3, "lock-up"), ({"turns": 200.0}, 3, "lock-up"),  # too many turns
+    ({"alpha_pN": 100.0}, 3, "lock-up"), ({"alpha_pN": 1e4}, 3, "lock-up"),  # chiral drive
+    ({"force_pN": 1e-8}, 4, "flat"),  # tension too small for floating point
+    ({"force_pN": 1e-4}, 0, "converged"), ({"force_pN": 1e6}, 0, "converged"),
+    ({"turns": 44.0}, 0, "converged"), ({"turns": -44.0, "alpha_pN": 100.0}, 0, "converged"),
 ])
-def test_stability_returns_data(kwargs):
+def test_stability_returns_data(kwargs, status, says):
+    """Extreme inputs give a determined outcome: status 3 beyond lock-up (45 deg), 4 when
+    the tails lie flat, else a converged braid below lock-up."""
     base = {"turns": 5.0, "force_pN": F, "length_nm": L, "tether_separation_nm": 20.0,
             "delta_nm": DELTA}
     base.update(kwargs)
     res = tweezer.solve_tweezer(**base)
-    assert isinstance(res.message, str) and res.message
+    assert res.status == status and res.success == (status == 0), res.message
+    assert says in res.message
     if res.success:
         assert 0.0 < res["extension_nm"] <= L
         assert abs(res["theta_rad"]) < ply.LOCKUP_ANGLE_RAD
         assert math.isfinite(res["torque_pN_nm"])
-    else:
-        assert res.status in (1, 2, 3, 4)
 
 
 def test_lockup_and_too_many_turns_are_status_3():
@@ -138,7 +140,6 @@ def test_convergence_table():
     ref = [r for r in rows if r["problem"] == "tweezer_d50_vs_reference"]
     assert max(r["error"] for r in exact) < 1e-9
     assert ref[-1]["error"] < 1e-5 < ref[0]["error"]
-    assert sum(r["wall_time_s"] for r in rows) < 30.0
 
 
 def test_cli_roundtrip():

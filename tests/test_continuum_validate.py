@@ -6,7 +6,7 @@ import math
 import numpy as np
 import pytest
 
-from dnabraid.continuum import knot, overhand, ply, tweezer
+from dnabraid.continuum import knot_braid, overhand, ply, tweezer
 from dnabraid.continuum._validate import check_finite, check_n, check_nonnegative, check_positive
 
 NOT_NUMBERS = [True, False, np.bool_(True), "1.5", "nan", None, [1.0], np.array([1.0, 2.0]),
@@ -82,14 +82,14 @@ def test_check_n_message_and_minimum():
 # ------------------------------------------------------------------------- the solvers use it
 @pytest.mark.parametrize("n", [0, 1.5, True, "2", None, math.nan])
 def test_knot_and_overhand_refuse_the_same_n(n):
-    for fn in (knot.turning_angle, knot.default_half_width, overhand.w_c_helical):
+    for fn in (knot_braid.turning_angle, knot_braid.default_half_width, overhand.w_c_helical):
         with pytest.raises(ValueError, match=r"^n must be an integer >= 1 \("):
             fn(n)
 
 
 def test_knot_and_overhand_agree_on_integral_floats():
     # the two former copies disagreed: knot refused 2.0, overhand took it; both take it now
-    assert knot.turning_angle(2.0) == knot.turning_angle(2) == 5 * math.pi
+    assert knot_braid.turning_angle(2.0) == knot_braid.turning_angle(2) == 5 * math.pi
     assert overhand.w_c_helical(2.0) == overhand.w_c_helical(np.int64(2))
 
 
@@ -100,7 +100,7 @@ def test_positive_arguments_refused_alike(bad):
     with pytest.raises(ValueError, match=r"^delta_nm must be a positive finite number"):
         tweezer.solve_tweezer(2.0, 1.0, 500.0, 20.0, bad)
     with pytest.raises(ValueError, match=r"^radius must be a positive finite number"):
-        knot.braid_length(bad, 1.0)
+        knot_braid.braid_length(bad, 1.0)
     with pytest.raises(ValueError, match=r"^h must be a positive finite number"):
         overhand.helical_braid(2, bad, 1.0)
 
@@ -108,7 +108,7 @@ def test_positive_arguments_refused_alike(bad):
 @pytest.mark.parametrize("bad", [True, "0.1", math.nan, math.inf, -0.1])
 def test_nonnegative_arguments_refused_alike(bad):
     with pytest.raises(ValueError, match=r"^mu must be a finite number >= 0"):
-        knot.scaled_tension(0.3, bad)
+        knot_braid.scaled_tension(0.3, bad)
     with pytest.raises(ValueError, match=r"^mu must be a finite number >= 0"):
         overhand.solve_overhand(0.3, 3, 1e-3, 1.0, bad)
     with pytest.raises(ValueError, match=r"^force_pN must be a finite number >= 0"):

@@ -101,15 +101,13 @@ def test_detect_equilibration_vs_pymbar(seed):
     assert (T - t0 + 1) / g_p_at_ours >= NEFF_EFFICIENCY * float(neff_p)
 
 
-def test_detect_equilibration_fast_on_long_series():
+def test_detect_equilibration_on_long_series():
+    """A long AR(1) series (rho = 0.9, g = 19) with a slow transient (its speed is a
+    benchmark, workflows/, not a test)."""
     rng = np.random.default_rng(4)
     T = 100_000
     x = ar1(0.9, T, rng) + 8.0 * np.exp(-np.arange(T) / 5000.0)
-    cv.detect_equilibration(x[:1000])  # warm-up
-    t = time.perf_counter()
     t0, g, _ = cv.detect_equilibration(x)
-    elapsed = time.perf_counter() - t
-    assert elapsed < 2.0  # typically ~0.05 s
     # the bias the remaining transient leaves in the kept mean,
     # 8 * 5000 e^{-t0/5000} / (T - t0), must be below the mean's SEM sqrt(var g / n)
     n = T - t0

@@ -2,7 +2,7 @@
 the message that outcome must carry (the key and value of a refusal, the check that stopped
 a run, "invariants kept" for a run that held them).
 
-Invariants (dnabraid.extremes): finite positions, bonds < 1.5 b, mean catenation within
+Invariants (dnabraid.validation.extremes): finite positions, bonds < 1.5 b, mean catenation within
 0.05 of the bead turns, potential energy < 50 kT per particle at the end of every turn
 value; a zero-temperature knot must converge. The default run takes the refusals and the
 cheap runs; the rest of the matrix is behind ``slow``.
@@ -12,7 +12,7 @@ import math
 
 import pytest
 
-from dnabraid.extremes import (
+from dnabraid.validation.extremes import (
     CASES,
     MAX_ENERGY_PER_BEAD_KT,
     OUTCOMES,

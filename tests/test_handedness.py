@@ -3,7 +3,7 @@ against the continuum tweezer braid.
 
 Zero temperature (fast, deterministic): the bead braid is formed quasi-statically by
 turning the trap in 40 increments with an energy minimisation after each
-(dnabraid.crosscheck), for the default braid geometry (2 x 200 nm, tethers 40 nm apart,
+(dnabraid.validation.crosscheck), for the default braid geometry (2 x 200 nm, tethers 40 nm apart,
 F = 2 pN, 150 mM) at n = +-2 turns. The continuum uses the bead model's own contact
 distance (5.48 nm, measured at alpha = 0) as Delta.
 
@@ -31,7 +31,7 @@ import math
 import numpy as np
 import pytest
 
-from dnabraid.crosscheck import compare_tweezer, zero_temperature_braid
+from dnabraid.validation.crosscheck import compare_tweezer, zero_temperature_braid
 
 N = 2.0
 TORQUE_RTOL = 0.15

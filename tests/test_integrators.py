@@ -11,7 +11,7 @@ import openmm
 import pytest
 from openmm import unit as u
 
-from dnabraid.engine import (
+from dnabraid.run.engine import (
     GAMMA_PER_PS,
     KB_KJ_PER_MOL_K,
     euler_maruyama_integrator,
@@ -79,11 +79,11 @@ def test_restart_gives_each_point_its_own_reproducible_stream():
     """Independent points of a run must not share noise (they did: every point loaded the
     same checkpoint, random-number state included, so the points' torques moved together).
     Engine.restart(k) gives stream k: different for different k, the same for the same k."""
-    from dnabraid.engine import Engine
+    from dnabraid.run.engine import Engine
     from dnabraid.scenes import make_scene
 
     m = make_scene("tether", {"length_nm": 50.0, "replicas": 1}).build()
-    e = Engine(m, platform="Reference", seed=4)
+    e = Engine.for_model(m, platform="Reference", seed=4)
     ends = []
     for k in (0, 1, 0):
         e.restart(k)
@@ -98,7 +98,7 @@ def test_blow_up_error_survives_pickling():
     exception pickling dropped the keyword-only fields, and the pool hung on the TypeError)."""
     import pickle
 
-    from dnabraid.engine import SimulationBlowUp
+    from dnabraid.run.engine import SimulationBlowUp
 
     e = SimulationBlowUp("blew up at step 7", step=7, term="stretch", saved="/x/last.xml")
     e2 = pickle.loads(pickle.dumps(e))

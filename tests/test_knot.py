@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from dnabraid import knot as K
+from dnabraid.statics import open_knot as K
 from dnabraid import scenes as scn
 from dnabraid.forces import reference as ref
 from dnabraid.forces import segment_contact as segc

@@ -2,7 +2,11 @@
 
 * no import circle inside ``dnabraid`` (module-level and function-level imports alike);
 * no force module imports :mod:`dnabraid.analysis`; geometry imports nothing above it;
-* no code outside ``dnabraid/scenes/`` compares a scene's name.
+* the layers of the zero-temperature side, bottom up: geometry, forces and continuum;
+  :mod:`dnabraid.statics` (bead solvers: uses geometry, forces, continuum and units only);
+  scenes; :mod:`dnabraid.validation` (runs scenes; nothing else in the package imports it);
+* no code outside ``dnabraid/scenes/`` compares a scene's name;
+* no two modules share a file name (``__init__.py`` aside), so that a name says which module.
 """
 
 import ast
@@ -90,6 +94,40 @@ def test_forces_and_geometry_stay_below():
             assert not any(d.startswith(("dnabraid.analysis", "dnabraid.scenes")) for d in deps), m
         if m.startswith("dnabraid.geometry"):
             assert all(d.startswith("dnabraid.geometry") for d in deps), (m, deps)
+
+
+#: What the zero-temperature bead solvers may import (besides themselves).
+STATICS_MAY_IMPORT = ("dnabraid.geometry", "dnabraid.forces", "dnabraid.continuum",
+                      "dnabraid.units", "dnabraid.errors")
+
+
+def test_statics_and_continuum_stay_below_scenes():
+    g = graph()
+    for m, deps in g.items():
+        if m.startswith("dnabraid.statics"):
+            bad = {d for d in deps if not d.startswith(("dnabraid.statics",) + STATICS_MAY_IMPORT)}
+            assert not bad, (m, bad)
+        if m.startswith("dnabraid.continuum"):
+            bad = {d for d in deps if d.startswith(
+                ("dnabraid.statics", "dnabraid.scenes", "dnabraid.validation", "dnabraid.run"))}
+            assert not bad, (m, bad)
+
+
+def test_validation_is_on_top():
+    g = graph()
+    for m, deps in g.items():
+        if m.startswith("dnabraid.validation") or m == "dnabraid.cli":
+            continue
+        assert not any(d.startswith("dnabraid.validation") for d in deps), m
+
+
+def test_module_file_names_are_unique():
+    seen = {}
+    for p in sorted(ROOT.rglob("*.py")):
+        if p.name != "__init__.py":
+            seen.setdefault(p.name, []).append(str(p.relative_to(ROOT)))
+    dup = {k: v for k, v in seen.items() if len(v) > 1}
+    assert not dup, dup
 
 
 def test_no_scene_name_comparisons_outside_scenes():

@@ -44,7 +44,7 @@ def test_mirror_pair_is_exact_without_chirality(tmp_path, pack):
     # the runs themselves are noisy: the plain estimator's error is not small
     assert z["sem_unpaired"] > 1e-3
     # and the series agree sample by sample, not only on average
-    from dnabraid.reporters import read_csv
+    from dnabraid.run.reporters import read_csv
 
     a = read_csv(str(tmp_path / "original" / "observables.csv"))
     b = read_csv(str(tmp_path / "image" / "observables.csv"))

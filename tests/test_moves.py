@@ -1,4 +1,4 @@
-"""Metropolis rigid-body and crankshaft moves (dnabraid.moves) against exact distributions.
+"""Metropolis rigid-body and crankshaft moves (dnabraid.run.moves) against exact distributions.
 
 The moves are driven here with numpy energies (no OpenMM), so the sampled distribution is
 the Metropolis chain's alone: a symmetric proposal with the Metropolis rule must reproduce
@@ -23,7 +23,7 @@ import math
 import numpy as np
 import pytest
 
-from dnabraid.moves import RigidMoves, random_rotation
+from dnabraid.run.moves import RigidMoves, random_rotation
 
 
 def _drive(mv, pos, energy, calls):

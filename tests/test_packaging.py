@@ -79,6 +79,7 @@ def wheel(tmp_path_factory):
     return whl
 
 
+@pytest.mark.integration
 def test_wheel_holds_the_tables(wheel):
     names = set(zipfile.ZipFile(wheel).namelist())
     for t in TABLES:
@@ -89,6 +90,7 @@ def test_wheel_holds_the_tables(wheel):
         assert any(n.startswith(pkg.replace(".", "/") + "/") for n in names), pkg
 
 
+@pytest.mark.integration
 @pytest.mark.parametrize("layout", ["zip", "unpacked"])
 def test_wheel_reads_the_tables(wheel, tmp_path, layout):
     """The wheel alone (first on sys.path, outside the checkout) serves the tables."""

@@ -1,4 +1,4 @@
-"""Packed replicas (dnabraid.packing): R copies of a scene in one System must be exactly R
+"""Packed replicas (dnabraid.run.packing): R copies of a scene in one System must be exactly R
 independent systems: the same energy and forces as each copy alone, no coupling through the
 excluded volume, and the same statistics as replicas in their own Contexts (the packed
 tether's error bars are calibrated against the exact discrete WLC)."""
@@ -11,7 +11,7 @@ import pytest
 from openmm import unit as u
 
 from dnabraid.continuum.wlc import discrete_wlc_exact
-from dnabraid.packing import PackError, grid_offsets, pack_models, packable, replicate_system
+from dnabraid.run.packing import PackError, grid_offsets, pack_models, packable, replicate_system
 from dnabraid.scenes import make_scene
 
 BRAID = {"length_nm": 60.0, "force_pN": 10.0, "turns": [1.0]}
@@ -99,7 +99,7 @@ def test_grid_offsets():
 
 def test_chiral_and_mirror_scenes_pack():
     """The chiral term is a PythonForce: it cannot be copied, so a packed System builds one
-    over every copy's strands (model.extra["rebuild_forces"]); without that recipe the
+    over every copy's strands (model.rebuild_forces); without that recipe the
     System cannot be packed. Mirror pairs pack too, along x only (tests/test_mirror.py
     checks that the packed image is still the exact mirror)."""
     s = make_scene("braid", dict(BRAID, alpha=1.0))
@@ -107,7 +107,7 @@ def test_chiral_and_mirror_scenes_pack():
     assert not packable(m.system)[0]
     with pytest.raises(PackError, match="cannot pack"):
         replicate_system(m.system, 2)
-    assert packable(m.system, m.extra["rebuild_forces"])[0]
+    assert packable(m.system, m.rebuild_forces)[0]
     assert s.pack_groups(range(4), 1, "CPU", m) == [(0, 1, 2, 3)]
     s = make_scene("braid", dict(BRAID, mirror="original"))
     assert s.pack_groups(range(4), 1, "CPU", s.build()) == [(0, 1, 2, 3)]

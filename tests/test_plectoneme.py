@@ -99,7 +99,7 @@ def twisted_run(tmp_path_factory):
 def test_linking_number_conserved(twisted_run):
     """Tw + Wr equals the bead turns in every frame (no passage), and the imposed turns to 1 %."""
     s, out, summ = twisted_run
-    from dnabraid.reporters import read_point
+    from dnabraid.run.reporters import read_point
 
     pdir = os.path.join(out, "replicas", "r00", "points")
     for f in sorted(os.listdir(pdir)):

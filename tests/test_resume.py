@@ -9,7 +9,7 @@ import json
 
 import pytest
 
-from dnabraid.engine import Engine
+from dnabraid.run.engine import Engine
 from dnabraid.scenes import make_scene
 
 SHORT = {"length_nm": 60.0, "tether_separation_nm": 20.0, "turns": [-1.0, 0.0, 1.0],

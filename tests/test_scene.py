@@ -7,7 +7,7 @@ import pytest
 
 from dnabraid import cli
 from dnabraid.chains import MIN_PASSAGE_BARRIER_KT, max_bead_spacing_nm, passage_barrier_kT
-from dnabraid.engine import integrator_seed
+from dnabraid.run.engine import integrator_seed
 from dnabraid.scenes import SCENES, SceneError, make_scene
 
 

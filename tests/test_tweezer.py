@@ -13,7 +13,7 @@ import pytest
 
 from dnabraid.analysis.geometry import bending_cosines
 from dnabraid.continuum.wlc import discrete_wlc_extension
-from dnabraid.engine import Engine, SimulationBlowUp
+from dnabraid.run.engine import Engine, SimulationBlowUp
 from dnabraid.scenes import make_scene
 from dnabraid.scenes.braid import LONG_BRAID
 
@@ -101,6 +101,7 @@ def braid_run(tmp_path_factory):
     return s, str(out), s.run(str(out))
 
 
+@pytest.mark.integration
 def test_braid_symmetric_at_zero_chirality(braid_run):
     s, out, summ = braid_run
     pts = {p["turns"]: p for p in summ["points"]}
@@ -113,6 +114,7 @@ def test_braid_symmetric_at_zero_chirality(braid_run):
     assert zp["mean"] < pts[0.0]["extension_nm"]["mean"] - 5 * zp["sem"]
 
 
+@pytest.mark.integration
 def test_catenation_follows_turns(braid_run):
     s, out, summ = braid_run
     for p in summ["points"]:
@@ -121,6 +123,7 @@ def test_catenation_follows_turns(braid_run):
         assert p["catenation"]["mean"] == pytest.approx(p["turns"], abs=0.01)
 
 
+@pytest.mark.integration
 def test_run_directory_is_self_describing(braid_run):
     import MDAnalysis as mda
 
@@ -150,6 +153,7 @@ def test_run_directory_is_self_describing(braid_run):
     assert "extension_nm" in header and "torque_pN_nm" in header
 
 
+@pytest.mark.integration
 def test_resume_skips_finished_points(braid_run, tmp_path):
     """A finished point is not run again; a removed one is rerun from its start checkpoint
     and ends with the same numbers (the checkpoint holds the random-number state)."""
@@ -169,6 +173,7 @@ def test_resume_skips_finished_points(braid_run, tmp_path):
     assert summ2["points"] == summ["points"]
 
 
+@pytest.mark.integration
 def test_resume_refuses_a_different_scene(braid_run):
     from dnabraid.rundir import RunDirError
 
@@ -182,7 +187,7 @@ def test_resume_refuses_a_different_scene(braid_run):
 def test_blow_up_names_step_and_term(tmp_path):
     s = make_scene("braid", {"length_nm": 100.0, "tether_separation_nm": 20.0})
     m = s.build()
-    e = Engine(m, seed=1)
+    e = Engine.for_model(m, seed=1)
     e.minimise()
     e.integrator.setStepSize(e.integrator.getStepSize() * 40)  # far past stability
     with pytest.raises(SimulationBlowUp) as exc:

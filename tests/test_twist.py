@@ -14,11 +14,11 @@ from openmm import unit as u
 from test_forces import check, random_chain
 
 from dnabraid.analysis import geometry as geo
-from dnabraid.analysis import twist as atw
+from dnabraid.geometry import ribbon as atw
 from dnabraid.analysis.stats import mean_sem
 from dnabraid.forces import bending_force, stretch_force
 from dnabraid.forces import reference_twist as rt
-from dnabraid.forces import twist as tw
+from dnabraid.forces import twist_frames as tw
 
 SEED = 20261122
 Z_TOL = 4.0
@@ -159,7 +159,7 @@ def test_writhe_of_open_helix_is_fuller_cap_area():
         t = np.diff(h, axis=0)
         t /= np.linalg.norm(t, axis=1)[:, None]
         z = np.tile([0.0, 0, 1], (m, 1))
-        area = np.sum(geo._triangle_solid_angle(z[:-1], t[:-1], t[1:]))
+        area = np.sum(geo.triangle_solid_angle(z[:-1], t[:-1], t[1:]))
         assert wr == pytest.approx(area / (2 * np.pi), abs=1e-6)
         # the polygon's tangents cut the cap's corners: relative error ~ (2 pi / 400)^2 / 12
         assert wr == pytest.approx(N * (1 - math.cos(th)), rel=2e-3)  # right-handed: > 0

@@ -1,7 +1,7 @@
 """Replicas in one OpenMM Context against one Context per replica (issue 13, item 3).
 
 R non-interacting copies of a scene's System are packed into one System
-(:func:`dnabraid.packing.replicate_system`, which `dnabraid run` uses since 2026-12-01, key
+(:func:`dnabraid.run.packing.replicate_system`, which `dnabraid run` uses since 2026-12-01, key
 ``pack``): particles, bonded terms and external terms copied with an index offset; the
 copies' excluded volume is kept apart by placing them ``spacing_nm`` apart along x (beyond
 the cutoff, so that the neighbour list never pairs two copies: checked below), centred on
@@ -25,8 +25,8 @@ import numpy as np
 import openmm
 from openmm import unit as u
 
-from dnabraid.engine import GAMMA_PER_PS
-from dnabraid.packing import replicate_system
+from dnabraid.run.engine import GAMMA_PER_PS
+from dnabraid.run.packing import replicate_system
 from dnabraid.scenes import make_scene, parse_value
 
 HERE = pathlib.Path(__file__).resolve().parent
@@ -92,7 +92,7 @@ def main(argv=None) -> int:
              f"{'R':>4} {'steps/s':>9} {'ms/step':>8} {'replica-steps/s':>16} "
              f"{'gain vs separate':>17} {'ns/particle/step':>17}"]
     for R in args.replicas:
-        sysR = replicate_system(model.system, R, model.extra.get("rebuild_forces"))
+        sysR = replicate_system(model.system, R, model.rebuild_forces)
         offs = (np.arange(R) - 0.5 * (R - 1)) * args.spacing_nm
         posR = np.concatenate([pos0 + np.array([o, 0.0, 0.0]) for o in offs])
         ctx, integ = _context(sysR, posR, dt_ps, scene.temperature_K)

@@ -50,6 +50,8 @@ import warnings
 import numpy as np
 from scipy import stats
 
+from dnabraid.analysis.calibration import calib_stats, pooled, t2_band, untruncated, z2_band
+
 HERE = pathlib.Path(__file__).resolve().parent
 
 LENGTHS = (100.0, 300.0, 1000.0, 2000.0)
@@ -177,7 +179,7 @@ def exact_for(L, F):
 def one_study(values: dict) -> dict:
     """One ``Tether.run`` in a scratch directory: its reported extension, the replicas'
     raw series (every sample), the verdict and the timing split."""
-    from dnabraid import reporters
+    from dnabraid.run import reporters
     from dnabraid.scenes import make_scene
 
     s = make_scene("tether", values)
@@ -198,62 +200,6 @@ def one_study(values: dict) -> dict:
             "reason": pt["convergence_reason"], "cut": e.get("equilibration_samples"),
             "series": series, "wall_s": wall,
             "split": split(before, TIMERS.snapshot(), wall)}
-
-
-# ----------------------------------------------------------------------------- statistics
-def clopper_pearson(k: int, n: int, level: float = 0.95) -> tuple[float, float]:
-    a = 1.0 - level
-    lo = 0.0 if k == 0 else stats.beta.ppf(a / 2, k, n - k + 1)
-    hi = 1.0 if k == n else stats.beta.ppf(1 - a / 2, k + 1, n - k)
-    return float(lo), float(hi)
-
-
-@functools.lru_cache(None)
-def t2_band(K: int, dof: int, level: float = 0.95, draws: int = 200_000) -> tuple:
-    """Monte-Carlo band of the mean of K squared Student-t(dof) draws (its variance is
-    infinite for dof <= 4, so no normal error applies)."""
-    rng = np.random.default_rng(12345 + K * 100 + dof)
-    m = np.empty(draws)
-    for i in range(0, draws, 20_000):
-        m[i:i + 20_000] = np.mean(rng.standard_t(dof, size=(20_000, K)) ** 2, axis=1)
-    a = (1 - level) / 2
-    return float(np.quantile(m, a)), float(np.quantile(m, 1 - a))
-
-
-def z2_band(K: int, level: float = 0.95) -> tuple:
-    a = (1 - level) / 2
-    return float(stats.chi2.ppf(a, K) / K), float(stats.chi2.ppf(1 - a, K) / K)
-
-
-def t_to_z(t: np.ndarray, dof: int) -> np.ndarray:
-    """Student-t scores mapped to standard-normal scores (probability integral
-    transform): N(0, 1) exactly when the t-scores follow Student t(dof)."""
-    return stats.norm.isf(stats.t.sf(t, dof))
-
-
-def calib_stats(means, sems, halfw, exact, R) -> dict:
-    m, s, h = (np.asarray(x, float) for x in (means, sems, halfw))
-    K = m.size
-    t = (m - exact) / s
-    z = t_to_z(t, R - 1)
-    cov = int(np.sum(np.abs(m - exact) <= h))
-    return {"K": K, "bias": float(m.mean() - exact),
-            "bias_err": float(m.std(ddof=1) / math.sqrt(K)) if K > 1 else float("nan"),
-            "covered": cov, "coverage": cov / K, "coverage_ci": clopper_pearson(cov, K),
-            "t2": float(np.mean(t**2)), "z2": float(np.mean(z**2)),
-            "scatter_over_sem2": float(m.var(ddof=1) / np.mean(s**2)) if K > 1 else float("nan"),
-            "mean_sem": float(np.mean(s)), "t": t.tolist(), "z": z.tolist()}
-
-
-def untruncated(studies, R) -> tuple:
-    """Study means, sems and 95 % half-widths with every sample kept (no cut)."""
-    tq = stats.t.ppf(0.975, R - 1)
-    m, s = [], []
-    for st in studies:
-        rm = np.array([np.mean(x) for x in st["series"]])
-        m.append(rm.mean())
-        s.append(rm.std(ddof=1) / math.sqrt(R))
-    return m, s, [tq * x for x in s]
 
 
 # ----------------------------------------------------------------------------- output
@@ -280,24 +226,6 @@ def calib_table(rows, R) -> list[str]:
             f"{c['t2']:.2f} [{lo_t:.2f}–{hi_t:.2f}] | {c['z2']:.2f} [{lo_z:.2f}–{hi_z:.2f}] | "
             f"{c['scatter_over_sem2']:.2f} | {c['mean_sem']:.2f} | {r['converged']:.2f} | "
             f"{u['coverage']:.3f} | {u['z2']:.2f} | {r['wall_s']:.2f} |")
-    return out
-
-
-def pooled(rows, R) -> dict:
-    if not rows:
-        return {}
-    out = {}
-    for key in ("reported", "no_cut"):
-        z = np.concatenate([r[key]["z"] for r in rows])
-        cov = sum(r[key]["covered"] for r in rows)
-        n = sum(r[key]["K"] for r in rows)
-        # bias in units of its error, per case: should scatter as N(0, 1)
-        b = np.array([r[key]["bias"] / r[key]["bias_err"] for r in rows])
-        out[key] = {"n": n, "covered": cov, "coverage": cov / n,
-                    "coverage_ci": clopper_pearson(cov, n), "z2": float(np.mean(z**2)),
-                    "z2_band": z2_band(n), "ks_p": float(stats.kstest(z, "norm").pvalue),
-                    "bias_chi2": float(np.sum(b**2)), "bias_dof": len(rows),
-                    "bias_chi2_p": float(stats.chi2.sf(np.sum(b**2), len(rows)))}
     return out
 
 

@@ -29,8 +29,6 @@ Usage: python workflows/catenane.py [--steps 60000] [--replicas 2] [--alpha 1.0]
 from __future__ import annotations
 
 import argparse
-import io
-import json
 import math
 import os
 import pathlib
@@ -39,7 +37,7 @@ import time
 import numpy as np
 
 from dnabraid.analysis.stats import bimodality
-from dnabraid.scenes import make_scene
+from dnabraid.sweep import run_or_load
 
 HERE = pathlib.Path(__file__).resolve().parent
 
@@ -53,32 +51,15 @@ def _fmt(d, p=3):
 
 def _pooled(summary: dict, column: str) -> np.ndarray:
     """All replicas' samples of ``column`` (from the run directory's observables.csv)."""
-    from dnabraid import reporters
+    from dnabraid.run import reporters
 
     out = summary["_out"]
     return np.asarray(reporters.read_csv(os.path.join(out, "observables.csv"))[column], float)
 
 
 def run_point(tag: str, keys: dict, out: str, log) -> dict:
-    d = os.path.join(out, tag)
-    path = os.path.join(d, "summary.json")
-    if os.path.exists(path):
-        with open(path) as fh:
-            summ = json.load(fh)
-        # keys added to the scene after the point ran take their defaults
-        have = {**make_scene("catenane").to_dict(), **summ["scene"]}
-        if have == make_scene("catenane", keys).to_dict():
-            summ["_out"] = d
-            return summ
-    s = make_scene("catenane", keys)
-    t0 = time.perf_counter()
-    summ = s.run(d)
-    buf = io.StringIO()
-    s.report(summ, d, buf)
-    log.write(f"## {tag} ({time.perf_counter() - t0:.0f} s)\n{buf.getvalue()}\n")
-    log.flush()
-    summ["_out"] = d
-    return summ
+    """The catenane scene with ``keys`` in ``<out>/<tag>`` (loaded if it finished there)."""
+    return run_or_load("catenane", keys, os.path.join(out, tag), report=log)
 
 
 def main(argv=None) -> int:

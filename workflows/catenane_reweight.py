@@ -37,17 +37,14 @@ import json
 import math
 import os
 import pathlib
-import sys
 import time
 
 import numpy as np
 
+from dnabraid.scenes import make_scene
+from dnabraid.sweep import run_or_load
+
 HERE = pathlib.Path(__file__).resolve().parent
-sys.path.insert(0, str(HERE))
-
-from catenane import run_point  # noqa: E402
-
-from dnabraid.scenes import make_scene  # noqa: E402
 
 POINTS = {
     "a0_dlk-1": {"alpha": 0.0, "delta_lk": -1, "link": 1},
@@ -82,12 +79,12 @@ def run_all(args, log) -> dict:
         keys = {**c, **POINTS[tag]}
         if tag == "a+6_dlk-1":  # the weak check, where the weights collapse: short
             keys["steps"] = args.direct_steps
-        out[tag] = run_point(tag, keys, args.out, log)
+        out[tag] = run_or_load("catenane", keys, os.path.join(args.out, tag), report=log)
         print(f"{tag}: done ({out[tag]['wall_time_s']:.0f} s)", flush=True)
     if not with_ring:
         return out
     ring = {**c, "rings": 1, "steps": args.ring_steps, "replicas": 4, "start": "apart"}
-    out["ring"] = run_point("ring", ring, args.out, log)
+    out["ring"] = run_or_load("catenane", ring, os.path.join(args.out, "ring"), report=log)
     print(f"ring: done ({out['ring']['wall_time_s']:.0f} s)", flush=True)
     return out
 
@@ -134,13 +131,13 @@ def replica_frames(run_dir: str, scene, stride: int) -> list[dict]:
     ``stride``-th frame after the burn-in."""
     import glob
 
-    from dnabraid import reporters
     from dnabraid.forces.reference_chiral import chiral_energy_forces
+    from dnabraid.run import reporters
     from dnabraid.scenes.catenane import ChiralEnergy
 
     model = scene.build()
     d = model.dna
-    rings = model.extra["rings"]
+    rings = model.rings
     kw = ChiralEnergy(rings, 1.0, d.diameter_nm, d.debye_nm, d.bead_spacing_nm).kw
     out = []
     for rd in sorted(glob.glob(os.path.join(run_dir, "replicas", "r*", "points", "*"))):
@@ -271,7 +268,7 @@ def _write_md(res, args, wall, path) -> None:
              f"(Delta = {res['diameter_nm']:.2f} nm, Delta/L = {res['diameter_nm'] / L:.3f}), "
              "A = 50 nm, C = 100 nm, "
              f"Brownian dynamics (Leimkuhler-Matthews, safety {args.safety}) with Metropolis "
-             "rigid-body and crankshaft moves (`dnabraid.moves`), "
+             "rigid-body and crankshaft moves (`dnabraid.run.moves`), "
              f"{args.replicas} replicas per run (half started apart, half in contact), "
              f"{args.steps} sampling steps each after "
              f"{args.equilibration}; frames every {args.frame_interval} steps, the first "

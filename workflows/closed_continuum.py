@@ -1,7 +1,7 @@
 """Continuum reference for closed braids (issue 14, item 4): links n = 1..5, knots (3,2)..(9,2).
 
 For each case at Delta/L = 0.02: the uniform closed ply, the torus helix corrected to
-O(eps^2), and the relaxed (Ritz) ply of :func:`dnabraid.continuum.closed.relax_closed_ply`,
+O(eps^2), and the relaxed (Ritz) ply of :func:`dnabraid.continuum.closed_ply.relax_closed_ply`,
 with its equilibrium residuals; then the rows against the seed's slides 21 and 23.  Writes
 ``workflows/results/closed_continuum.md`` (and ``.json``).
 
@@ -15,7 +15,7 @@ import json
 import pathlib
 import time
 
-from dnabraid.continuum import closed as cc
+from dnabraid.continuum import closed_ply as cc
 
 HERE = pathlib.Path(__file__).resolve().parent
 CASES = [("link", n) for n in (1, 2, 3, 4, 5)] + [("knot", n) for n in (3, 5, 7, 9)]

@@ -5,7 +5,7 @@ Tables written to workflows/results/closed.md (+ closed.json, figures closed_*.p
   1. the 4-link at Delta/L = 0.02: bead-spacing convergence b = h/2, h/4, h/8 (h = Delta/2)
      with smooth segment contact, and b = h/2, h/4 with bead contact; mean eta, the p range
      and the symmetry against slide 21 and the continuum closed ply
-     (dnabraid.continuum.closed: eta to O(eps^2), mean p by virtual work on the torus);
+     (dnabraid.continuum.closed_ply: eta to O(eps^2), mean p by virtual work on the torus);
   2. the pentafoil (5, 2): p and the contact curve's curvature against slide 23;
   3. links n = 1..5 and knots (3, 2) ... (9, 2): relaxed, p >= 0 and contact kept or not.
 Each case is relaxed from the uniform closed ply with a random perturbation (seed 1) that
@@ -23,7 +23,7 @@ import time
 
 import numpy as np
 
-from dnabraid import closed as C
+from dnabraid.statics import closed_braid as C
 
 HERE = pathlib.Path(__file__).resolve().parent
 OUT = HERE / "results" / "closed.md"
@@ -94,13 +94,13 @@ def _harm(h):
 
 def write_md(rows: dict) -> None:
     L = [f"# closed braids, {time.strftime('%Y-%m-%d %H:%M')}", "",
-         "Scene `closed` (dnabraid/closed.py): bead rings (bending B, bonds strain < 1e-5, no "
-         "twist), hard contact Delta (penalty, overlap ~1e-4 Delta), Delta/L = 0.02, relaxed "
+         "Scene `closed` (dnabraid/statics/closed_braid.py): bead rings (bending B, bonds "
+         "strain < 1e-5, no twist), hard contact Delta (penalty, overlap ~1e-4 Delta), Delta/L = 0.02, relaxed "
          "by damped Newton with the rigid modes pinned, from the uniform closed ply perturbed "
          "by 0.02 Delta (seed 1). p in B/L^3 (contact force per unit strand length), eta in rad "
          "(> 0 left-handed), kappa_c in 1/L. min/max are of the per-bead values smoothed over "
          "~Delta of strand (removes the bead-scale corrugation); means are per bead. "
-         "Continuum: dnabraid.continuum.closed.closed_ply (eta_mean to O(eps^2); p_mean by "
+         "Continuum: dnabraid.continuum.closed_ply.closed_ply (eta_mean to O(eps^2); p_mean by "
          "virtual work on the torus family; p0 = B sin^4/r^3 the straight torque-free ply). "
          "Seed: van der Heijden, 'Equilibrium theory of elastic braids' (seed 000). Wall "
          "times: a shared 2-core machine running other jobs (load 7-18); they vary ~3x "
@@ -315,7 +315,7 @@ def main(argv=None) -> int:
     js = OUT.with_suffix(".json")
     rows = {} if args.fresh or not js.exists() else json.loads(js.read_text())
     # the continuum columns are recomputed (cheap closed forms), so the tables follow
-    # dnabraid.continuum.closed as it is now; the relaxations are not rerun
+    # dnabraid.continuum.closed_ply as it is now; the relaxations are not rerun
     for name, r in rows.items():
         if "failed" not in r:
             br = C.ClosedBraid(topology=r["topology"], n=r["n"],

@@ -16,7 +16,7 @@ import pathlib
 import platform
 import time
 
-from dnabraid.continuum.cli import PROBLEMS, problem_module
+from dnabraid.continuum.commands import PROBLEMS, problem_module
 
 HERE = pathlib.Path(__file__).resolve().parent
 

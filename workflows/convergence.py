@@ -1,6 +1,6 @@
 """Error against run time (work-precision) for the bead model's cross-checks.
 
-A. Zero-temperature braid vs the continuum tweezer braid (dnabraid.crosscheck): the default
+A. Zero-temperature braid vs the continuum tweezer braid (dnabraid.validation.crosscheck): the default
    braid geometry (2 x 200 nm, tethers 40 nm, F = 2 pN, n = 2), bead spacing b = 5, 4, 2.5,
    2 nm; error = relative difference of extension and of torque from the continuum at the
    bead model's own contact distance.
@@ -36,7 +36,7 @@ HERE = pathlib.Path(__file__).resolve().parent
 
 
 def part_a(spacings):
-    from dnabraid.crosscheck import compare_tweezer
+    from dnabraid.validation.crosscheck import compare_tweezer
 
     rows = []
     for b in spacings:

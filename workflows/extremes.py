@@ -1,11 +1,11 @@
-"""Run the stiff-and-extreme matrix of dnabraid.extremes and write its outcome table.
+"""Run the stiff-and-extreme matrix of dnabraid.validation.extremes and write its outcome table.
 
 Each case runs a few thousand Brownian steps (force 0.05-150 pN, salt 1 mM-3 M, bead spacing
 1 nm, turns near lock-up, fast ramps, strong chirality, time step at the stability limit) and
 is reported as ok (invariants kept), refused (validation error naming the key) or stopped
 (blow-up error naming the step and term), beside the outcome the case expects. Each case
 runs with its scene's short-run settings (Scene.default_short_run) and the matrix's common
-ones (dnabraid.extremes.MATRIX). Writes workflows/results/extremes.md.
+ones (dnabraid.validation.extremes.MATRIX). Writes workflows/results/extremes.md.
 
 Usage: taskset -c 0 python workflows/extremes.py [--steps N] [--cases NAME ...]
 """
@@ -16,7 +16,7 @@ import argparse
 import pathlib
 import time
 
-from dnabraid.extremes import CASES, run_case
+from dnabraid.validation.extremes import CASES, run_case
 
 HERE = pathlib.Path(__file__).resolve().parent
 

@@ -6,7 +6,7 @@ while each run claimed ~9.5). So this script runs the braid at turns -n, 0, +n f
 seeds and each alpha (a dnabraid sweep over `alpha` x `seed`, one replica per point: the
 seeds are the replicas), forms per seed the torque sum Gamma(+n) + Gamma(-n) and extension
 difference z(+n) - z(-n), and reports their mean with the standard error across seeds
-(t-statistic; dnabraid.sweep.handedness_across_seeds), beside the zero-temperature
+(t-statistic; dnabraid.analysis.handedness.handedness_across_seeds), beside the zero-temperature
 continuum value.
 
 Usage: python workflows/handedness_seeds.py [--alpha 0 12] [--seeds 6] [--workers 2]
@@ -20,6 +20,7 @@ import pathlib
 import time
 
 from dnabraid import sweep
+from dnabraid.analysis.handedness import handedness_across_seeds
 
 HERE = pathlib.Path(__file__).resolve().parent
 
@@ -50,7 +51,7 @@ def main(argv=None) -> int:
              f"{args.seeds} seeds per alpha; sweep wall {wall:.0f} s", "",
              "| alpha (pN) | seeds | torque sum (pN nm) | SE across seeds | t | "
              "z(+n) - z(-n) (nm) | SE | per-seed torque sums |", "|---|---|---|---|---|---|---|---|"]
-    found = {h["group"]: h for h in sweep.handedness_across_seeds(res.rows, n)}
+    found = {h["group"]: h for h in handedness_across_seeds(res.rows, n)}
     for a in args.alpha:
         h = found.get(float(a))
         if h is None or h["torque_sum_pN_nm"] is None:

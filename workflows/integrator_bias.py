@@ -3,7 +3,7 @@
 A free bead chain (tether at F = 0.05 pN, no wall, no self-avoidance) has independent
 hinge angles with <cos beta> = coth(x) - 1/x = exp(-b/lp) exactly (x = kappa/kT); the
 measured persistence length -b / ln<cos beta> must be 50 nm. Euler-Maruyama (OpenMM's
-BrownianIntegrator) and the Leimkuhler-Matthews scheme (`dnabraid.engine`, a
+BrownianIntegrator) and the Leimkuhler-Matthews scheme (`dnabraid.run.engine`, a
 CustomIntegrator with the same cost per step) are run at several `timestep_safety` values
 (time step = safety x the Euler-Maruyama stability limit 2 / rate_max) for the same
 physical time; the table gives <cos beta>, lp and the bias against the exact value.
@@ -21,7 +21,7 @@ import time
 import numpy as np
 
 from dnabraid.analysis.stats import mean_sem
-from dnabraid.engine import Engine
+from dnabraid.run.engine import Engine
 from dnabraid.geometry.curves import bending_cosines
 from dnabraid.scenes import make_scene
 
@@ -31,7 +31,7 @@ def measure(integrator: str, safety: float, frames: int, seed: int = 3) -> dict:
                               "self_avoidance": False, "seed": seed, "replicas": 1,
                               "timestep_safety": safety})
     m = s.build()
-    e = Engine(m, seed=s.seed, integrator=integrator, threads=1)
+    e = Engine.for_model(m, seed=s.seed, integrator=integrator, threads=1)
     every = max(1, int(round(500 * 0.3 / safety)))
     t0 = time.perf_counter()
     cs = np.array([bending_cosines(e.advance(every)).mean() for _ in range(frames)])

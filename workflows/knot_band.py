@@ -1,7 +1,7 @@
 """Trefoil band collapse with the smooth (segment) contact (issue 14, item 1).
 
-For each (eps, b, contact) the open trefoil is relaxed (damped Newton, dnabraid.knot.relax)
-from a tight start (loop 0.8 x sqrt(B/2T): the knot loosens) and a loose one (1.25 x: it
+For each (eps, b, contact) the open trefoil is relaxed (damped Newton,
+dnabraid.statics.open_knot.relax) from a tight start (loop 0.8 x sqrt(B/2T): the knot loosens) and a loose one (1.25 x: it
 tightens). With a frictionless contact both must reach the same equilibrium; the bead
 contact's corrugation pins the loop instead (static friction ~ b / (4h)), so its two ends
 bracket the equilibrium.
@@ -29,7 +29,7 @@ import json
 import pathlib
 import time
 
-from dnabraid import knot as K
+from dnabraid.statics import open_knot as K
 
 HERE = pathlib.Path(__file__).resolve().parent
 B_PN_NM2 = 1000.0

@@ -1,8 +1,8 @@
 """Open elastic knots in the bead rod (zero temperature) against the continuum theory.
 
 For each (n, eps, b) the knot is relaxed (damped Newton,
-dnabraid.knot.relax) twice: from a loose start (loop 1.2 x theory: the knot tightens) and
-from a tight one (0.85 x: it loosens). The discrete contact between beads pins sliding
+dnabraid.statics.open_knot.relax) twice: from a loose start (loop 1.2 x theory: the knot
+tightens) and from a tight one (0.85 x: it loosens). The discrete contact between beads pins sliding
 (static friction of order P b / (4 h), P the total contact force), so the two ends bracket
 the frictionless equilibrium; the bracket narrows with the bead spacing b.
 
@@ -24,7 +24,7 @@ import json
 import pathlib
 import time
 
-from dnabraid import knot as K
+from dnabraid.statics import open_knot as K
 
 HERE = pathlib.Path(__file__).resolve().parent
 B_PN_NM2 = 1000.0

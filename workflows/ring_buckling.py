@@ -29,7 +29,7 @@ import time
 
 import numpy as np
 
-from dnabraid import reporters
+from dnabraid.run import reporters
 from dnabraid.analysis.stats import bimodality
 from dnabraid.scenes import make_scene
 

@@ -60,7 +60,7 @@ from scipy import special as _special
 
 from .stats import (
     MIN_SAMPLES,
-    _as_series,
+    as_series,
     integrated_autocorrelation_time,
     mean_sem,
 )
@@ -336,12 +336,12 @@ def detect_equilibration(x, *, nskip: int = 1, max_fraction: float = 0.5,
     possible). A constant series returns ``(0, 1.0, 1.0)``, and a constant suffix counts
     as one sample, both as in pymbar.
     """
-    return _chodera(_as_series(x), nskip, max_fraction, n_candidates, c)[:3]
+    return _chodera(as_series(x), nskip, max_fraction, n_candidates, c)[:3]
 
 
 def _mser(x, batch: int, max_fraction: float = 0.5) -> tuple[int, bool]:
     """:func:`mser` plus a flag: True when the minimum lies at the edge of the search."""
-    arr = _as_series(x)
+    arr = as_series(x)
     batch = int(batch)
     if batch < 1:
         raise ValueError(f"batch must be >= 1; got {batch}")
@@ -658,9 +658,9 @@ def replica_summary(series_list, *, confidence: float = 0.95, equilibration="cho
     0.1 % / 0 % at 220.
     """
     if isinstance(series_list, np.ndarray) and series_list.ndim == 2:
-        series = [_as_series(row) for row in series_list]
+        series = [as_series(row) for row in series_list]
     elif isinstance(series_list, Sequence) or isinstance(series_list, np.ndarray):
-        series = [_as_series(s) for s in series_list]
+        series = [as_series(s) for s in series_list]
     else:
         raise ValueError("series_list must be a sequence of 1-D series or an (R, T) array")
     R = len(series)

@@ -4,8 +4,8 @@
 from ..geometry.curves import *  # noqa: F401,F403
 from ..geometry.curves import (  # noqa: F401
     __all__,
-    _as_points,
-    _gauss_sum,
-    _pair_solid_angles,
-    _triangle_solid_angle,
+    as_points,
+    gauss_sum,
+    pair_solid_angles,
+    triangle_solid_angle,
 )

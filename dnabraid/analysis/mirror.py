@@ -5,7 +5,7 @@ torque change sign, the extension does not) are sampled by two runs with one see
 ``mirror = "original"`` at turns ``[n, ...]`` and ``mirror = "image"`` at ``[-n, ...]``
 (:class:`dnabraid.scenes.braid.Braid`). The image starts from the mirror of the original's
 start and is driven by the mirror of its noise (a signed-noise Euler-Maruyama
-``CustomIntegrator``, :func:`dnabraid.engine.euler_maruyama_integrator`). Without a chiral
+``CustomIntegrator``, :func:`dnabraid.run.engine.euler_maruyama_integrator`). Without a chiral
 term the energy is mirror-symmetric, so the image *is* the mirror of the original,
 sample by sample: ``z(+n) - z(-n)`` and ``Gamma(+n) + Gamma(-n)`` vanish replica by replica
 (to round-off), as they must at alpha = 0. With ``alpha != 0`` only the chiral force breaks

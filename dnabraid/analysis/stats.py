@@ -45,7 +45,7 @@ __all__ = [
 MIN_SAMPLES = 10
 
 
-def _as_series(x) -> np.ndarray:
+def as_series(x) -> np.ndarray:
     arr = np.asarray(x, dtype=np.float64)
     if arr.ndim == 2 and arr.shape[1] == 1:  # a column vector is accepted
         arr = arr[:, 0]
@@ -73,7 +73,7 @@ def autocorrelation(x) -> np.ndarray:
         (biased estimator, as in Sokal), ``rho(0) = 1``. All zeros after ``rho(0)`` for a
         constant series.
     """
-    arr = _as_series(x)
+    arr = as_series(x)
     n = arr.size
     dx = arr - arr.mean()
     nfft = 1 << (2 * n - 1).bit_length()
@@ -140,7 +140,7 @@ def blocking_sem(x) -> dict:
         compared with its correlation time; then the last level with at least 2 blocks is
         used); ``naive`` (True for fewer than :data:`MIN_SAMPLES` samples).
     """
-    arr = _as_series(x)
+    arr = as_series(x)
     n = arr.size
     mean = float(arr.mean())
     if n < MIN_SAMPLES:
@@ -197,7 +197,7 @@ def mean_sem(x, *, method: str = "sokal") -> dict:
     """
     if method not in ("sokal", "blocking"):
         raise ValueError(f"method must be 'sokal' or 'blocking'; got {method!r}")
-    arr = _as_series(x)
+    arr = as_series(x)
     n = int(arr.size)
     mean = float(arr.mean())
     out = {"mean": mean, "n": n, "method": method, "naive": False}

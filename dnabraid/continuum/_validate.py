@@ -15,11 +15,13 @@ import numbers
 
 import numpy as np
 
+from ..errors import UserError
+
 __all__ = ["check_finite", "check_n", "check_nonnegative", "check_positive"]
 
 
 
-class InputError(ValueError):
+class InputError(UserError):
     """A bad argument of a continuum problem (the CLI reports it as a user error)."""
 
 

@@ -11,7 +11,7 @@ from .bonded import bending_force, stretch_force
 from .contact import contact_exclusion_range, contact_force
 from .excluded import wca_exclusions, wca_force
 from .external import bead_exclusion_force, pull_force, trap_force, wall_force
-from .twist import frame_springs, twist_anchor_force, twist_bead_force, twist_force
+from .twist_frames import frame_springs, twist_anchor_force, twist_bead_force, twist_force
 
 __all__ = [
     "bending_force",

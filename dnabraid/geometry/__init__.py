@@ -4,7 +4,8 @@ Used by forces, scenes and analysis alike; it imports nothing else from dnabraid
 no force ever imports :mod:`dnabraid.analysis`.
 
 * :mod:`.curves`: Gauss linking, writhe, catenation, crossing angles, bending.
-* :mod:`.twist`: frames, parallel transport, twist, open-chain writhe, plectonemes.
+* :mod:`.ribbon`: the framed chain as a ribbon: frames, parallel transport, twist,
+  open-chain writhe and linking (Lk = Tw + Wr), plectonemes.
 * :mod:`.starts`: starting conformations.
 """
 

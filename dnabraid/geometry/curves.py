@@ -71,7 +71,7 @@ _PAIR_CHUNK = 400_000
 
 
 # ----------------------------------------------------------------------------- helpers
-def _as_points(x, name: str, *, min_points: int = 2) -> np.ndarray:
+def as_points(x, name: str, *, min_points: int = 2) -> np.ndarray:
     """Validate an ``(n, 3)`` array of positions and return it as float64."""
     arr = np.asarray(x, dtype=np.float64)
     if arr.ndim != 2 or arr.shape[1] != 3:
@@ -88,7 +88,7 @@ def _closed_segments(c: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return c, np.roll(c, -1, axis=0)
 
 
-def _triangle_solid_angle(v1, v2, v3):
+def triangle_solid_angle(v1, v2, v3):
     """Signed solid angle of the spherical triangle with corner vectors ``v1, v2, v3``.
 
     Van Oosterom & Strackee (1983). Shapes ``(..., 3)`` -> ``(...)``. Degenerate
@@ -109,7 +109,7 @@ def _triangle_solid_angle(v1, v2, v3):
     return np.where(degenerate, 0.0, omega)
 
 
-def _pair_solid_angles(a, b, c, d):
+def pair_solid_angles(a, b, c, d):
     """Signed solid angle Omega_ij for segments ``a->b`` (curve 1) and ``c->d`` (curve 2).
 
     Broadcasting shapes ``(..., 3)``; returns ``(...)``. The Gauss integral of the pair is
@@ -119,10 +119,10 @@ def _pair_solid_angles(a, b, c, d):
     v2 = c - b  # (1, 0)
     v3 = d - b  # (1, 1)
     v4 = d - a  # (0, 1)
-    return _triangle_solid_angle(v1, v2, v3) + _triangle_solid_angle(v1, v3, v4)
+    return triangle_solid_angle(v1, v2, v3) + triangle_solid_angle(v1, v3, v4)
 
 
-def _gauss_sum(a, b, c, d, mask_fn=None) -> float:
+def gauss_sum(a, b, c, d, mask_fn=None) -> float:
     """Sum of Omega_ij / (4 pi) over all pairs (segment i of curve 1, segment j of curve 2).
 
     Parameters
@@ -141,7 +141,7 @@ def _gauss_sum(a, b, c, d, mask_fn=None) -> float:
     j = np.arange(m)[None, :]
     for start in range(0, n, rows):
         stop = min(n, start + rows)
-        omega = _pair_solid_angles(
+        omega = pair_solid_angles(
             a[start:stop, None, :], b[start:stop, None, :], c[None, :, :], d[None, :, :]
         )
         if mask_fn is not None:
@@ -169,11 +169,11 @@ def gauss_linking_number(c1, c2) -> float:
         Positive for right-handed links (e.g. the two strands of a right-handed double
         helix closed into rings).
     """
-    p = _as_points(c1, "c1", min_points=3)
-    q = _as_points(c2, "c2", min_points=3)
+    p = as_points(c1, "c1", min_points=3)
+    q = as_points(c2, "c2", min_points=3)
     a, b = _closed_segments(p)
     c, d = _closed_segments(q)
-    return _gauss_sum(a, b, c, d)
+    return gauss_sum(a, b, c, d)
 
 
 def writhe(c) -> float:
@@ -194,7 +194,7 @@ def writhe(c) -> float:
     float
         Writhe (dimensionless). Zero for planar curves; changes sign under reflection.
     """
-    p = _as_points(c, "c", min_points=4)
+    p = as_points(c, "c", min_points=4)
     n = p.shape[0]
     a, b = _closed_segments(p)
 
@@ -202,7 +202,7 @@ def writhe(c) -> float:
         # pairs i < j that do not share a vertex; (0, n-1) share vertex 0
         return (j > i + 1) & ~((i == 0) & (j == n - 1))
 
-    return 2.0 * _gauss_sum(a, b, a, b, mask_fn=upper_nonadjacent)
+    return 2.0 * gauss_sum(a, b, a, b, mask_fn=upper_nonadjacent)
 
 
 def catenation_number(strand1, strand2, ray_length: float | None = None) -> float:
@@ -235,8 +235,8 @@ def catenation_number(strand1, strand2, ray_length: float | None = None) -> floa
     float
         Catenation number (turns, dimensionless).
     """
-    p = _as_points(strand1, "strand1")
-    q = _as_points(strand2, "strand2")
+    p = as_points(strand1, "strand1")
+    q = as_points(strand2, "strand2")
     if ray_length is None:
         extent = max(np.ptp(p, axis=0).max(), np.ptp(q, axis=0).max(), 1e-12)
         ray_length = 1e4 * float(extent)
@@ -246,7 +246,7 @@ def catenation_number(strand1, strand2, ray_length: float | None = None) -> floa
     up = np.array([0.0, 0.0, ray_length])
     pe = np.vstack([p[0] - up, p, p[-1] + up])
     qe = np.vstack([q[0] - up, q, q[-1] + up])
-    return _gauss_sum(pe[:-1], pe[1:], qe[:-1], qe[1:])
+    return gauss_sum(pe[:-1], pe[1:], qe[:-1], qe[1:])
 
 
 # ----------------------------------------------------------------------------- angles
@@ -363,8 +363,8 @@ def crossing_angles(strand1, strand2, cutoff: float):
     distance : ndarray, shape (k,)
         The corresponding closest distances in nm.
     """
-    p = _as_points(strand1, "strand1")
-    q = _as_points(strand2, "strand2")
+    p = as_points(strand1, "strand1")
+    q = as_points(strand2, "strand2")
     cutoff = float(cutoff)
     if not cutoff > 0.0:
         raise ValueError(f"cutoff must be positive (nm); got {cutoff}")
@@ -447,7 +447,7 @@ def bond_lengths(strand) -> np.ndarray:
     ndarray, shape (n-1,)
         Bond lengths in nm.
     """
-    p = _as_points(strand, "strand")
+    p = as_points(strand, "strand")
     return np.linalg.norm(np.diff(p, axis=0), axis=1)
 
 
@@ -464,7 +464,7 @@ def bending_cosines(strand) -> np.ndarray:
     ndarray, shape (n-2,)
         ``cos(angle)`` between bond i and bond i+1 (1 for a straight chain).
     """
-    p = _as_points(strand, "strand", min_points=3)
+    p = as_points(strand, "strand", min_points=3)
     bonds = np.diff(p, axis=0)
     lengths = np.linalg.norm(bonds, axis=1)
     if np.any(lengths == 0.0):

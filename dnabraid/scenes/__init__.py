@@ -5,9 +5,13 @@ a TOML file plus flat ``KEY=VALUE`` overrides, validated at this entry point. Th
 (``dnabraid scenes``, ``dnabraid run``), sweeps and the extremes matrix read the keys,
 defaults, units and help from here; nothing outside this package asks a scene's name.
 
-Adding a scene = one new module here with a :class:`~dnabraid.scenes.base.Scene` subclass
-(``name``, ``help``, keys declared with :func:`~dnabraid.scenes.base.key`, ``validate``,
-``run``, ``report``, ``rows``) and one line in ``SCENES``.
+Adding a thermal scene = one new module here with a
+:class:`~dnabraid.scenes.thermal.ThermalScene` subclass (``name``, ``help``, keys declared
+with :func:`~dnabraid.scenes.base.key`, ``validate``, ``build`` into a typed
+:class:`~dnabraid.chains.Model`, ``observables``, ``states`` and ``state_of``) and one line
+in ``SCENES``; the run driver (:mod:`dnabraid.run.driver`) does the rest. A zero-temperature
+scene subclasses :class:`~dnabraid.scenes.base.Scene` and implements ``run``, ``report`` and
+``rows`` itself.
 """
 
 from __future__ import annotations

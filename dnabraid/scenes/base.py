@@ -16,11 +16,12 @@ import math
 from typing import Any, ClassVar
 
 from .. import tomlio
+from ..errors import UserError
 
 __all__ = ["KeyInfo", "Scene", "SceneError", "key"]
 
 
-class SceneError(ValueError):
+class SceneError(UserError):
     """A scene could not be built: unknown key, bad value or impossible geometry."""
 
 

@@ -20,8 +20,8 @@ import numpy as np
 from .. import observables as ob
 from .. import units
 from ..forces import bead_exclusion_force, pull_force, stretch_force, trap_force
-from ._tweezer import TurnedScene, lockup_turns
 from .base import SceneError, key
+from .tweezer import TurnedScene, lockup_turns
 
 #: values of the ``mirror`` key
 MIRROR_MODES = ("off", "original", "image")
@@ -129,16 +129,15 @@ class Braid(TurnedScene):
         kit.bound("wall", "stretch")
         kit.bound("trap", "link")
         kit.attachments = att
-        kit.extra = {"bead_center": center}
+        kit.bead_center = center
         return {"bead_center": center, "zeta_center_pN_ns_per_nm": zeta_center,
                 "zeta_attach_pN_ns_per_nm": d.zeta_bead,
                 "zeta_bead_physical_pN_ns_per_nm": zeta_phys,
                 "wall_k_pN_per_nm": d.wall_k if self.surface else 0.0,
                 "n_exclusions": n_excl}
 
+    #: every turn value, n = 0 included, gets a built (overdispersed) start of its own
     builds_turned_start: ClassVar[bool] = True
-    #: n = 0 gets a built (overdispersed) start too, not the shared straight one
-    builds_zero_start: ClassVar[bool] = True
 
     @property
     def noise_sign(self):
@@ -148,17 +147,28 @@ class Braid(TurnedScene):
 
     @property
     def mirror_axis(self):
-        """1 (y) for the image of a mirror-coupled pair, else None (read by the runner,
-        which minimises the image's start in the original's frame and then mirrors it)."""
+        """1 (y) for the image of a mirror-coupled pair, else None (the run driver minimises
+        the image's start in the original's frame and then mirrors it)."""
         return 1 if self.mirror == "image" else None
+
+    @property
+    def pack_along_line(self) -> bool:
+        """Mirror-coupled pairs pack along x, which keeps the image pack the exact mirror of
+        the original's."""
+        return self.mirror != "off"
+
+    def start(self, model, segment) -> np.ndarray:
+        """The built start at the segment's start turns (:meth:`start_positions`)."""
+        return self.start_positions(model, segment.start_turns)
 
     def start_positions(self, model, turns: float) -> np.ndarray:
         """The built start at ``turns`` (:meth:`built_start`); for the image of a
-        mirror-coupled pair, the y -> -y mirror of the original's start at ``-turns``
-        (the tethers lie on the x axis, so the mirror is a state of the same system, with
+        mirror-coupled pair, the y -> -y mirror of the original's start at ``-turns`` (the
+        tethers lie on the x axis, so the mirror is a state of the same system, with
         catenation and bead angle negated)."""
+        turns = float(turns)
         if self.mirror == "image":
-            pos = self.built_start(model, -float(turns))
+            pos = self.built_start(model, -turns)
             pos[:, 1] = -pos[:, 1]
             return pos
         return self.built_start(model, turns)
@@ -171,7 +181,7 @@ class Braid(TurnedScene):
         r = s/2 - (s/2 - r_c) w(u), w the smoothstep of min(1, 3 sin(pi u))) while the chord angle winds in
         proportion to w, flat at both ends, so the chord at the top is turned by n turns; the height H is chosen so that each strand's contour is
         L, and beads are placed every b along it. The bead centre sits above the
-        attachments. The runner then minimises with the trap at n (no strand passage: the
+        attachments. The run driver then minimises with the trap at n (no strand passage: the
         excluded volume keeps the catenation), and the replicas' noise does the rest.
         """
         n = float(turns)
@@ -238,13 +248,14 @@ class Braid(TurnedScene):
             spacing.append(sarc[-1] / (nb - 1))
         att = model.attachments
         R = self.bead_radius_nm
-        pos[model.extra["bead_center"]] = (pos[att].mean(axis=0)
+        pos[model.bead_center] = (pos[att].mean(axis=0)
                                            + np.array([0.0, 0.0, np.sqrt(R * R - half * half)]))
         return pos, 1.0 - min(spacing) / max(spacing)
 
     def observables(self, model) -> list:
         att = model.attachments
-        return [ob.Extension(att), ob.BeadAngle((att[0], att[1])),
+        return [ob.Extension(att),
+                ob.BeadAngle((att[0], att[1]), self.trap_stiffness_pN_nm, self.turn_rate),
                 ob.TrapTorque(self.trap_stiffness_pN_nm), ob.Catenation(model.chains)]
 
     def notes(self, model) -> list[str]:

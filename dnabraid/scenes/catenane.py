@@ -45,7 +45,7 @@ and from the start apart they touched in 0-2 % after 2e5 steps. (2) The rings' s
 writhes (slowest bending modes, ~1e4-1e5 steps; the 2026-12-01 alpha sweep had writhe
 R-hat 1.4). Hence the Metropolis moves after every report interval (``rigid_moves``, cycled:
 a relative shift of the rings, a turn of one ring about its centre, a crankshaft turn of an
-arc of up to half a ring; :mod:`dnabraid.moves`), which keep the Boltzmann distribution
+arc of up to half a ring; :mod:`dnabraid.run.moves`), which keep the Boltzmann distribution
 exactly and never change Lk_12 or Lk_i (a move that would is refused). With 10 moves per
 100 steps the contact length's bulk ESS over 4 replicas x 8.8e4 steps rose from 13 to
 1217 (workflows/results/benchmark_moves.txt); the single ring's <dTw_half^2> stays exact
@@ -56,15 +56,12 @@ correlations are physical; the moves' are not).
 from __future__ import annotations
 
 import dataclasses
-import json
 import math
-import os
-import time
 from typing import ClassVar
 
 import numpy as np
 
-from .. import forcefield, reporters, rundir
+from .. import forcefield
 from ..chains import (
     MIN_PASSAGE_BARRIER_KT,
     ChainKit,
@@ -72,27 +69,22 @@ from ..chains import (
     max_bead_spacing_nm,
     passage_barrier_kT,
 )
-from ..engine import INTEGRATORS, MAX_SEED, check_platform
-from ..forces.chiral import chiral_force, default_exclusion
+from ..forces.chiral import default_exclusion
 from ..forces.reference_chiral import chiral_energy_forces, default_subdivisions
 from ..geometry.curves import crossing_angles, gauss_linking_number, writhe
-from ..geometry.twist import ring_twist
-from ..moves import RigidMoves
-from ..observables import Observable
-from ..protocols import TurnSchedule
-from ._tweezer import (
-    MAX_REPLICAS,
-    PACK_HELP,
-    _run_jobs,
-    _usable_cores,
-    packing_notes,
-    replica_jobs,
-)
-from .base import DNAQuantities, Scene, SceneError, key, resolve_salt_alpha
+from ..geometry.ribbon import ring_twist
+from ..observables import Column, Observable
+from ..run.driver import MAX_REPLICAS
+from ..run.engine import INTEGRATORS, MAX_SEED
+from ..run.moves import RigidMoves
+from ..run.states import Schedule
+from ..units import TWO_PI
+from .base import key, resolve_salt_alpha
+from .thermal import ThermalScene
+from .tweezer import PACK_HELP
 
 __all__ = ["Catenane", "RingObservables", "ChiralEnergy", "hopf_start"]
 
-TWO_PI = 2.0 * math.pi
 _MECH = forcefield.mechanics()
 #: Smallest number of beads per ring.
 MIN_RING_BEADS = 12
@@ -164,18 +156,25 @@ class RingObservables(Observable):
         self.b = float(bead_spacing_nm)
         cols = {}
         for k in range(1, len(self.rings) + 1):
-            cols[f"twist_{k}"] = ("turns", f"Tw of ring {k} (joint angles / 2 pi, seam included)")
-            cols[f"writhe_{k}"] = ("turns", f"Wr of ring {k} (Gauss self-integral)")
-            cols[f"dtw_half_{k}"] = ("turns", f"Tw of ring {k}'s first half minus its second "
-                                     "half; <dtw_half^2> = L / (4 pi^2 C) exactly")
-        cols["lk_error"] = ("turns", "max over rings of |Tw + Wr - delta_lk| (White's theorem; "
-                            "round-off unless the topology changed)")
+            cols[f"twist_{k}"] = Column("turns", f"Tw of ring {k} (joint angles / 2 pi, seam "
+                                        "included)")
+            cols[f"writhe_{k}"] = Column("turns", f"Wr of ring {k} (Gauss self-integral)",
+                                         verdict=True)
+            cols[f"dtw_half_{k}"] = Column("turns", f"Tw of ring {k}'s first half minus its "
+                                           "second half; <dtw_half^2> = L / (4 pi^2 C) "
+                                           "exactly", summarised=False)
+        cols["lk_error"] = Column("turns", "max over rings of |Tw + Wr - delta_lk| (White's "
+                                  "theorem; round-off unless the topology changed)",
+                                  summarised=False)
         if len(self.rings) == 2:
-            cols["lk12"] = ("", "Gauss linking number of the two rings")
-            cols["contact_length_nm"] = ("nm", "b x ring-1 segments with a ring-2 segment "
-                                         "closer than the contact distance")
-            cols["braid_angle_rad"] = ("rad", "contact-averaged folded braid angle eta (< 0 "
-                                       "right-handed); NaN without contact")
+            cols["lk12"] = Column("", "Gauss linking number of the two rings",
+                                  summarised=False)
+            cols["contact_length_nm"] = Column("nm", "b x ring-1 segments with a ring-2 "
+                                               "segment closer than the contact distance",
+                                               verdict=True)
+            cols["braid_angle_rad"] = Column("rad", "contact-averaged folded braid angle eta "
+                                             "(< 0 right-handed, folded into (-pi/2, pi/2]); "
+                                             "NaN without contact", summarised=False)
         self.columns = cols
 
     def __call__(self, pos, ctx, values):
@@ -221,42 +220,14 @@ class ChiralEnergy(Observable):
                        exclude_neighbours=default_exclusion(bead_spacing_nm, delta_nm, debye_nm),
                        subdivisions=default_subdivisions(bead_spacing_nm, delta_nm, debye_nm),
                        closed=True)
-        self.columns = {"chiral_energy_pN_nm": ("pN nm", "alpha tan(eta/2) summed over "
-                                                "contacts (numpy twin of the force)")}
+        self.columns = {"chiral_energy_pN_nm": Column("pN nm", "alpha tan(eta/2) summed over "
+                                                      "contacts (numpy twin of the force)")}
 
     def __call__(self, pos, ctx, values):
         if self.alpha == 0.0:
             return {"chiral_energy_pN_nm": 0.0}
         e, _ = chiral_energy_forces(pos, self.rings, self.alpha, **self.kw)
         return {"chiral_energy_pN_nm": float(e)}
-
-
-def _summarise(series: list, equilibration="chodera") -> dict:
-    """Mean, error and convergence verdict of one observable from its replica series.
-
-    ``equilibration`` is handed to :func:`~dnabraid.analysis.convergence.replica_summary`:
-    ``"chodera"`` (automatic detection) for ordinary observables, ``None`` for squared
-    fluctuations such as dTw_half^2, whose chi^2-like series start with no transient to
-    remove (the scene's equilibration_steps, >> the twist relaxation time, already did)
-    and whose rare large values the detector would cut as a "transient", biasing the mean
-    low (measured on a 144-nm ring: 0.0258 with detection, 0.0347 without, theory 0.0365).
-    """
-    from ..analysis.convergence import MIN_ESS_RELAXED, RHAT_MAX_RELAXED, replica_summary
-
-    series = [np.asarray(x, float) for x in series]
-    if not series or any(x.size == 0 or not np.all(np.isfinite(x)) for x in series):
-        return {"mean": None, "sem": None}
-    if len(series) == 1:
-        d = reporters.mean_sem_entry(series[0])
-        d.update(converged=False, reason="one replica: no between-replica check", n_replicas=1)
-        return d
-    r = replica_summary(series, rhat_max=RHAT_MAX_RELAXED, min_ess=MIN_ESS_RELAXED,
-                        equilibration=equilibration)
-    return {"mean": float(r["mean"]), "sem": float(r["sem"]),
-            "ci_halfwidth": float(r["ci_halfwidth"]), "n_replicas": int(r["n_replicas"]),
-            "sem_within": float(r["sem_within"]), "rhat": float(r["rhat"]),
-            "ess": float(r["ess"]), "replica_means": [float(x) for x in r["replica_means"]],
-            "converged": bool(r["converged"]), "reason": r["reason"]}
 
 
 def _between(means) -> dict:
@@ -269,33 +240,8 @@ def _between(means) -> dict:
             "replica_means": [float(x) for x in m]}
 
 
-def _moves_summary(dirs) -> dict | None:
-    """Rigid-move counts summed over the replicas (their ``moves.json``); None without."""
-    tot: dict = {}
-    for d in dirs:
-        path = os.path.join(d, "moves.json")
-        if not os.path.exists(path):
-            continue
-        with open(path) as fh:
-            m = json.load(fh)
-        for k, v in m.items():
-            if isinstance(v, dict):
-                t = tot.setdefault(k, {"attempted": 0, "refused_by_constraint": 0,
-                                       "accepted": 0})
-                for c in t:
-                    t[c] += int(v[c])
-            else:
-                tot[k] = v
-    if not tot:
-        return None
-    for v in tot.values():
-        if isinstance(v, dict):
-            v["acceptance"] = v["accepted"] / v["attempted"] if v["attempted"] else None
-    return tot
-
-
 @dataclasses.dataclass(frozen=True)
-class Catenane(DNAQuantities, Scene):
+class Catenane(ThermalScene):
     """Two linked DNA minicircles (or one ring) at room temperature; keys in nm, pN, K."""
 
     name: ClassVar[str] = "catenane"
@@ -317,7 +263,7 @@ class Catenane(DNAQuantities, Scene):
                      "between-replica convergence check)")
     rigid_moves: int = key(10, "", "Metropolis moves after every report interval, cycling a "
                            "relative shift of the rings, a turn of one ring about its centre "
-                           "and a crankshaft turn of an arc (dnabraid.moves); 0 = Brownian "
+                           "and a crankshaft turn of an arc (dnabraid.run.moves); 0 = Brownian "
                            "dynamics alone, whose rings take ~3e6 steps to slide through each "
                            "other")
     move_shift_nm: float = key(8.0, "nm", "radius of the rings' relative shift (a ball)")
@@ -357,9 +303,7 @@ class Catenane(DNAQuantities, Scene):
                           "within 1 % of b/C at the default step) or 'euler' (Euler-Maruyama: "
                           "+2 to +11 % measured)")
 
-    trap_parameter: ClassVar[str | None] = None
-    #: Observables whose convergence decides the verdict.
-    verdict_observables: ClassVar[tuple] = ("writhe_1", "writhe_2", "contact_length_nm")
+    state_widths: ClassVar[dict] = {"delta_lk": 9, "alpha_pN": 9}
 
     # -- derived -----------------------------------------------------------------------
     @property
@@ -372,9 +316,6 @@ class Catenane(DNAQuantities, Scene):
         if self.contact_nm > 0:
             return float(self.contact_nm)
         return self.effective_diameter_nm + 2.0 * forcefield.salt_parameters(self.salt_mM).debye_nm
-
-    def replica_seed(self, r: int) -> int:
-        return self.seed * MAX_REPLICAS + r
 
     @property
     def start_of_replica(self) -> str:
@@ -474,18 +415,8 @@ class Catenane(DNAQuantities, Scene):
                                     chain_id="FG"[k]) for k, r in enumerate(rings)]
         if self.alpha != 0.0:
             # Kornyshev chiral term between facing segments, the rings closed (seam
-            # segments included); its rate as in the tweezer scenes
-
-            def make_chiral(chains, d=d, alpha=self.alpha):
-                return chiral_force(chains, alpha, delta_nm=d.diameter_nm, debye_nm=d.debye_nm,
-                                    bead_spacing_nm=d.bead_spacing_nm, closed=True,
-                                    name="chiral")
-
-            kit.add_force(make_chiral(rings), "chiral",
-                          rate=abs(self.alpha) * 0.1 / d.debye_nm**2 * 4.0 / d.zeta_bead)
-            # packed replicas build one chiral term over every copy's rings
-            kit.extra["rebuild_forces"] = {"chiral": (make_chiral, [np.asarray(r, int).copy()
-                                                                   for r in rings])}
+            # segments included; packed replicas build one over every copy's rings)
+            kit.add_chiral(self.alpha, rings, closed=True)
         kit.bound("stretch", "bend", "wca", "chiral", "twist_on_dna")
         kit.bound("frame", "twist")
         kit.sides = np.concatenate(sides)
@@ -505,56 +436,64 @@ class Catenane(DNAQuantities, Scene):
                 return all(abs(sum(ring_tw_wr(pos[r], pos[sd])[1:]) - lk) < 0.5
                            for r, sd in zip(ri, si))
 
-            kit.extra["moves"] = RigidMoves(
+            kit.moves = RigidMoves(
                 [np.concatenate([r, sd]) for r, sd in zip(ring_idx, side_idx)], d.kT,
                 shift_nm=self.move_shift_nm if two else 0.0,
                 angle_rad=self.move_angle_rad if two else 0.0, pivots=ring_idx,
                 allowed=same_topology, moves_per_call=self.rigid_moves, seed=self.seed,
                 rings=list(zip(ring_idx, side_idx)), arc_angle_rad=self.arc_angle_rad)
-        kit.extra["rings"] = [np.asarray(r, int) for r in rings]
-        kit.extra["ring_sides"] = [np.asarray(s, int) for s in sides]
+        kit.rings = [np.asarray(r, int) for r in rings]
+        kit.ring_sides = [np.asarray(s, int) for s in sides]
         g = self.twist_persistence_nm * d.kT / self.bead_spacing_nm
         params = {"n_exclusions": n_excl, "twist_g_pN_nm": g, "alpha_pN": self.alpha,
                   "beads_per_ring": self.n_beads, "length_bp": self.length_nm / 0.34,
                   "diameter_over_length": d.diameter_nm / self.length_nm,
                   "contact_distance_nm": self.contact_distance_nm}
-        return kit.finish(self, safety=self.timestep_safety, params=params)
+        return kit.finish(safety=self.timestep_safety, params=params, length_nm=self.length_nm)
 
     def observables(self, model: Model) -> list:
         d = model.dna
-        rings = model.extra["rings"]
-        return [RingObservables(rings, model.extra["ring_sides"], self.delta_lk,
+        rings = model.rings
+        return [RingObservables(rings, model.ring_sides, self.delta_lk,
                                 self.link if self.rings == 2 else None,
                                 self.contact_distance_nm, self.bead_spacing_nm),
                 ChiralEnergy(rings, self.alpha, d.diameter_nm, d.debye_nm, d.bead_spacing_nm)]
 
-    def schedule(self) -> TurnSchedule:
-        """One point (no turns): equilibrate, then sample."""
-        return TurnSchedule((0.0,), turn_rate=None, equilibration_steps=self.equilibration_steps,
-                            sample_steps=self.steps, report_interval=self.report_interval,
-                            mode="independent")
+    def states(self) -> Schedule:
+        """One state, fixed by the keys (each ring's Delta Lk, alpha, Lk_12): equilibrate,
+        then sample."""
+        return Schedule.single(equilibration_steps=self.equilibration_steps,
+                               sample_steps=self.steps, report_interval=self.report_interval)
 
-    def start_positions(self, model: Model, turns: float):
-        raise SceneError("the catenane scene has no turn values")
+    def state_of(self, segment) -> dict:
+        return {"delta_lk": self.delta_lk, "alpha_pN": self.alpha}
+
+    def notes(self, model: Model) -> list[str]:
+        return [f"rings of {self.n_beads} beads ({self.length_nm / 0.34:.0f} bp), "
+                f"Delta/L = {model.params['diameter_over_length']:.4f}; contact distance "
+                f"{self.contact_distance_nm:.2f} nm"]
 
     # -- summary -------------------------------------------------------------------------
     def twist_half_variance_theory(self) -> float:
         """<dTw_half^2> = L / (4 pi^2 C) (turns^2), exact for the model (module docstring)."""
         return self.n_beads * self.bead_spacing_nm / (4 * math.pi**2 * self.twist_persistence_nm)
 
-    def point_summary(self, reps: list) -> dict:
-        """From the replicas' (samples, frames): means with errors, the checks, the verdict."""
+    def point_summary(self, segment, reps: list, columns: dict) -> dict:
+        """The generic means, errors and verdict (writhes and contact length decide it),
+        plus the ring checks: the half-twist variance against its exact value (no
+        equilibration cut: squared fluctuations are chi^2-like, and the detector would cut
+        their rare large values as a "transient", biasing the mean low; measured on a 144-nm
+        ring: 0.0258 with detection, 0.0347 without, theory 0.0365), the between-replica
+        variances, Lk conservation, contact fraction, the contact-averaged braid angle and
+        the handedness it implies."""
         S = [s for s, _ in reps]
-        F = [f for _, f in reps]
-        pt: dict = {"delta_lk": self.delta_lk, "alpha_pN": self.alpha}
+        pt = super().point_summary(segment, reps, columns)
         for k in range(1, self.rings + 1):
-            for c in (f"twist_{k}", f"writhe_{k}"):
-                pt[c] = _summarise([s[c] for s in S])
-            pt[f"twist_half_variance_{k}"] = _summarise([s[f"dtw_half_{k}"] ** 2 for s in S],
-                                                        equilibration=None)
+            pt[f"twist_half_variance_{k}"] = self.summarise(
+                [s[f"dtw_half_{k}"] ** 2 for s in S], equilibration=None)
             pt[f"writhe_variance_{k}"] = _between([np.var(s[f"writhe_{k}"]) for s in S])
             pt[f"twist_variance_{k}"] = _between([np.var(s[f"twist_{k}"]) for s in S])
-            pt[f"writhe_abs_{k}"] = _summarise([np.abs(s[f"writhe_{k}"]) for s in S])
+            pt[f"writhe_abs_{k}"] = self.summarise([np.abs(s[f"writhe_{k}"]) for s in S])
         pt["twist_half_variance_theory"] = self.twist_half_variance_theory()
         pt["lk_error_max"] = float(max(np.max(s["lk_error"]) for s in S))
         pt["lk_conserved"] = bool(pt["lk_error_max"] < 1e-6)
@@ -562,7 +501,6 @@ class Catenane(DNAQuantities, Scene):
             lk12 = np.concatenate([s["lk12"] for s in S])
             pt["lk12_min"], pt["lk12_max"] = float(lk12.min()), float(lk12.max())
             pt["lk12_conserved"] = bool(np.all(np.abs(lk12 - self.link) < 1e-6))
-            pt["contact_length_nm"] = _summarise([s["contact_length_nm"] for s in S])
             pt["contact_fraction"] = _between([np.mean(s["contact_length_nm"] > 0) for s in S])
             # contact-averaged braid angle: per replica, over the samples in contact
             # (weighted by contact length), then mean and error across replicas
@@ -575,16 +513,6 @@ class Catenane(DNAQuantities, Scene):
                            else None)
             pt["braid_angle_rad"] = _between(per)
             pt["handedness"] = self.handedness(pt["braid_angle_rad"])
-            pt["chiral_energy_pN_nm"] = _summarise([f["chiral_energy_pN_nm"] for f in F])
-        pt["n_samples"] = int(sum(len(s["step"]) for s in S))
-        pt["n_frames"] = int(sum(len(f["step"]) for f in F))
-        pt["n_replicas"] = len(reps)
-        verdict = [(c, pt[c]) for c in self.verdict_observables
-                   if c in pt and pt[c]["mean"] is not None]
-        pt["converged"] = all(v.get("converged", False) for _, v in verdict)
-        pt["convergence_reason"] = "; ".join(f"{c}: {v.get('reason', '')}" for c, v in verdict
-                                             if not v.get("converged", False)) or "ok"
-        pt["effective_sample_size"] = {c: v.get("ess") for c, v in verdict}
         return pt
 
     @staticmethod
@@ -596,66 +524,6 @@ class Catenane(DNAQuantities, Scene):
         if eta["sem"] is None or abs(eta["mean"]) < 2.0 * eta["sem"]:
             return "undetermined"
         return "right" if eta["mean"] < 0 else "left"
-
-    def units(self) -> dict:
-        return {"twist_i, writhe_i": "turns", "lk12": "Gauss linking number",
-                "contact_length_nm": "nm", "braid_angle_rad": "rad, folded into (-pi/2, "
-                "pi/2], < 0 right-handed (geometry.curves.crossing_angles)",
-                "chiral_energy_pN_nm": "pN nm", "twist_half_variance": "turns^2; theory "
-                "L / (4 pi^2 C)", "sem": "standard error across independent replicas"}
-
-    # -- run -----------------------------------------------------------------------------
-    def run(self, out: str, *, platform: str = "CPU", threads: int | None = None,
-            progress_factory=None) -> dict:
-        t0 = time.perf_counter()
-        check_platform(platform)
-        model = self.build()
-        rundir.prepare_out_dir(self, out)
-        sched = self.schedule()
-        obs = self.observables(model)
-        workers = self.workers or _usable_cores()
-        R = self.replicas
-        groups, nw, jobs = replica_jobs(self, range(R), workers, platform, threads, out, model)
-        bar = progress_factory(sched.total_steps * R) if progress_factory else None
-        try:
-            results = [x for res in _run_jobs(jobs, nw, bar) for x in res]
-        finally:
-            if bar:
-                bar.close()
-        pt = self.point_summary([reporters.read_point(r["dirs"][0]) for r in results])
-        pt["rigid_moves"] = _moves_summary([r["dirs"][0] for r in results])
-        wall = time.perf_counter() - t0
-        resumed = any(r["resumed"] for r in results)
-        total = sched.total_steps * R
-        dt_ns = model.timestep.time_step_ns
-        rundir.write_topology(os.path.join(out, "topology.pdb"), model.topology, model.positions)
-        sample_cols = {k: v for ob in obs if ob.every == "sample" for k, v in ob.columns.items()}
-        frame_cols = {k: v for ob in obs if ob.every == "frame" for k, v in ob.columns.items()}
-        reporters.combine(out, [d for r in results for d in r["dirs"]], model.topology,
-                          dt_ns * 1e3, self.frame_interval, sample_cols, frame_cols)
-        notes = [f"rings of {self.n_beads} beads ({self.length_nm / 0.34:.0f} bp), "
-                 f"Delta/L = {model.params['diameter_over_length']:.4f}; contact distance "
-                 f"{self.contact_distance_nm:.2f} nm"]
-        if resumed:
-            notes.append("resumed from checkpoints; wall_time_s counts this invocation only")
-        if not pt["converged"]:
-            notes.append("NOT CONVERGED: " + pt["convergence_reason"] + "; raise `steps` or "
-                         "`replicas`")
-        notes += packing_notes(groups)
-        n_part = model.system.getNumParticles()
-        summary = rundir.Summary(
-            scene=self.to_dict(), wall_time_s=wall, platform=platform,
-            time_step_ps=dt_ns * 1e3, time_step_reason=model.timestep.reason,
-            relaxation_rates_per_ns=model.timestep.rates_per_ns, total_steps=total,
-            steps_per_second=total / wall if not resumed else None,
-            ns_per_bead_per_step=(wall / total / n_part * 1e9 * nw) if not resumed else None,
-            n_particles=n_part, forces=sorted(model.forces),
-            effective_diameter_nm=model.params["diameter_nm"],
-            bending_kappa_kT=model.params["kappa_kT"], units=self.units(), notes=notes,
-            versions=rundir.versions(), points=[pt], seed=self.seed,
-            integrator_seed=results[0]["integrator_seed"])
-        rundir.write_summary(os.path.join(out, "summary.json"), summary)
-        return summary.to_dict()
 
     # -- CLI and sweeps ------------------------------------------------------------------
     def report(self, summary: dict, out: str, file) -> None:

@@ -7,11 +7,12 @@ Starostin & van der Heijden, JMPS 64, 83 (2014)): torus links with Lk = -n, n = 
 Delta/L = 0.02 (slides 19-20), the 4-link's contact pressure and braid angle (slide 21),
 torus knots (n, 2) (slide 22) and the pentafoil's pressure and contact-curve curvature
 (slide 23). No tweezer bead, surface, electrostatics, twist or temperature: bead rings with
-bending and stiff bonds, relaxed by the damped Newton method of :mod:`dnabraid.closed`.
-L is the length of each of the braid's two strands (a ring for a link, half the ring for
-a knot). Outputs: braid angle eta(s), contact pressure p(s) in B/L^3, the contact curve's
-curvature (knots, 1/L), Gauss linking number and writhe per ring, the dominant harmonics
-of p and eta (their symmetry, found from a perturbed start), figures like slides 21/23.
+bending and stiff bonds (:mod:`dnabraid.statics.closed_braid`), relaxed by the damped Newton
+method of :mod:`dnabraid.statics.newton`. L is the length of each of the braid's two strands
+(a ring for a link, half the ring for a knot). Outputs: braid angle eta(s), contact pressure
+p(s) in B/L^3, the contact curve's curvature (knots, 1/L), Gauss linking number and writhe
+per ring, the dominant harmonics of p and eta (their symmetry, found from a perturbed
+start), figures like slides 21/23.
 """
 
 from __future__ import annotations
@@ -92,7 +93,7 @@ class Closed(Scene):
              f"{self.diameter_over_length}: raise spacing_over_radius")
 
     def braid(self):
-        from ..closed import ClosedBraid
+        from ..statics.closed_braid import ClosedBraid
 
         return ClosedBraid(topology=self.topology, n=self.n, handedness=self.handedness,
                            diameter_nm=self.diameter_nm,
@@ -106,7 +107,7 @@ class Closed(Scene):
         """Relax the braid; write scene.toml, topology.pdb, closed.npz, summary.json, closed.png."""
         from openmm import app
 
-        from ..closed import solve
+        from ..statics.closed_braid import solve
 
         t0 = time.perf_counter()
         rundir.prepare_out_dir(self, out)

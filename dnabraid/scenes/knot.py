@@ -4,10 +4,11 @@ pulled by a tension T at both ends, relaxed at zero temperature.
 No tweezer bead, surface, electrostatics or temperature: the rod is made of beads
 (harmonic bonds, hinges (B/b)(1 - cos beta)) with self-contact at 2h (key ``contact``: between
 the segments joining the beads, a smooth tube (default), or between the beads, a corrugated
-one that pins the loop), relaxed by the damped Newton method of :mod:`dnabraid.knot`. Measured loop radius, braid length and wave number
-are compared with the continuum theory: T = EI / (2 R^2) and l = 2 w_c sqrt(2 h R)
-(Audoly, Clauvelin & Neukirch 2007, Eqs. 1 and 7) and k = (sqrt(12) h R)^(-1/2) (Jawed,
-Dieleman, Audoly & Reis 2015, Eq. 3).
+one that pins the loop), relaxed by the damped Newton method of
+:mod:`dnabraid.statics.newton` (the model: :mod:`dnabraid.statics.open_knot`). Measured loop
+radius, braid length and wave number are compared with the continuum theory:
+T = EI / (2 R^2) and l = 2 w_c sqrt(2 h R) (Audoly, Clauvelin & Neukirch 2007, Eqs. 1 and 7)
+and k = (sqrt(12) h R)^(-1/2) (Jawed, Dieleman, Audoly & Reis 2015, Eq. 3).
 """
 
 from __future__ import annotations
@@ -70,7 +71,7 @@ class Knot(Scene):
         need(self.bending_stiffness_pN_nm2 > 0, "bending_stiffness_pN_nm2", "must be > 0")
         need(self.bead_spacing_nm > 0, "bead_spacing_nm", "must be > 0")
         need(0.5 <= self.start_loop_factor <= 2.0, "start_loop_factor", "must be in [0.5, 2]")
-        from ..knot import CONTACT_MODELS
+        from ..statics.open_knot import CONTACT_MODELS
 
         need(self.contact in CONTACT_MODELS, "contact",
              f"must be one of {', '.join(map(repr, CONTACT_MODELS))}")
@@ -92,7 +93,7 @@ class Knot(Scene):
              "bead spacing; raise the tension or bead_spacing_nm")
 
     def rod(self):
-        from ..knot import KnotRod
+        from ..statics.open_knot import KnotRod
 
         return KnotRod(n=self.knot_n, thickness_nm=self.rod_radius_nm,
                        bending_stiffness_pN_nm2=self.bending_stiffness_pN_nm2,
@@ -105,7 +106,7 @@ class Knot(Scene):
         from openmm import app
 
         from .. import plots
-        from ..knot import compare
+        from ..statics.open_knot import compare
 
         t0 = time.perf_counter()
         rundir.prepare_out_dir(self, out)

@@ -20,7 +20,7 @@ import numpy as np
 from .. import forcefield, units
 from .. import observables as ob
 from ..forces import pull_force, stretch_force, trap_force
-from ..forces.twist import (
+from ..forces.twist_frames import (
     bead_plane_force,
     frame_springs,
     initial_side_positions,
@@ -29,9 +29,9 @@ from ..forces.twist import (
     twist_force,
 )
 from ..geometry import random_tether
-from ..geometry.twist import writhe_open
-from ._tweezer import TurnedScene
+from ..geometry.ribbon import writhe_open
 from .base import key
+from .tweezer import TurnedScene
 
 #: Frame arm a (side particle distance from the axis) in units of the bead spacing.
 FRAME_ARM_FRACTION = 1.0
@@ -141,7 +141,9 @@ class Plectoneme(TurnedScene):
     def observables(self, model) -> list:
         c = model.chains[0]
         m = model.bead_orientation
-        return [ob.Extension(model.attachments), ob.BeadAngle((model.attachments[0], m)),
+        return [ob.Extension(model.attachments),
+                ob.BeadAngle((model.attachments[0], m), self.trap_stiffness_pN_nm,
+                             self.turn_rate),
                 ob.TrapTorque(self.trap_stiffness_pN_nm),
                 ob.TwistTorque(c, model.sides, m, self.twist_persistence_nm, model.dna.kT,
                                self.length_nm),
@@ -154,21 +156,11 @@ class Plectoneme(TurnedScene):
             "torsionally constrained DNA: side-particle frames, twist persistence "
             f"{self.twist_persistence_nm} nm, twist-stretch coupling left out"]
 
-    def units(self) -> dict:
-        u = super().units()
-        u.update({
-            "twist_torque": "pN nm, 2 pi Tw C kT / L (exact in the mean; less noisy than the "
-                            "trap torque)",
-            "twist": "turns (Tw, clamps included)",
-            "writhe": "turns (Wr, Gauss integral, chain closed by vertical rays)",
-            "linking": "turns (Tw + Wr; equals the bead angle while the DNA does not pass "
-                       "through itself)",
-            "plectonemes": "number per frame; plectoneme_length in nm of DNA; tip in nm of "
-                           "contour from the surface (geometry.twist.find_plectonemes)"})
-        return u
-
-    def point_summary(self, reps: list) -> dict:
-        pt = super().point_summary(reps)
+    def point_summary(self, segment, reps: list, columns: dict) -> dict:
+        """Adds the linking number Tw + Wr (equal to the bead angle while the DNA does not
+        pass through itself), the fraction of frames with a plectoneme and the median tip
+        position (nm of contour from the surface)."""
+        pt = super().point_summary(segment, reps, columns)
         pt["linking"] = self.summarise([f["twist"] + f["writhe"] for _, f in reps])
         pl = np.concatenate([f["plectonemes"] for _, f in reps])
         tip = np.concatenate([f["plectoneme_tip_nm"] for _, f in reps])

@@ -20,8 +20,8 @@ from .. import observables as ob
 from .. import units
 from ..forces import pull_force
 from ..geometry import random_tether
-from ._tweezer import TweezerScene
 from .base import key
+from .tweezer import TweezerScene
 
 
 @dataclasses.dataclass(frozen=True)
@@ -50,7 +50,7 @@ class Tether(TweezerScene):
             pos = random_tether(self.n_beads, self.bead_spacing_nm, d.kappa_kT, self.seed,
                                 z_min=0.5 * d.diameter_nm if self.surface else None)
         else:
-            kit.extra["exact_start"] = True
+            kit.exact_start = True
         chain = kit.add_chain(pos, "A", last_friction=zeta_attach)
         kit.add_stretch(self.stretch)
         kit.add_bend()

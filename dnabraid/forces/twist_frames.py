@@ -56,7 +56,7 @@ Rings (closed chains). A ring of n beads has n bonds, n side particles and n joi
 seam joint ``(r_{n-1}, r_0, r_1, s_{n-1}, s_0)`` is an ordinary joint
 (:func:`ring_joints`), every joint stands for a bond length b, and there are no clamps. The
 ribbon's linking number Lk = Tw + Wr is then fixed by the frames the ring starts with
-(:func:`dnabraid.geometry.twist.ring_side_positions`) and changes only if the ring passes
+(:func:`dnabraid.geometry.ribbon.ring_side_positions`) and changes only if the ring passes
 through itself or a joint angle passes through pi (the atan2 branch cut, at g pi^2 / 2 =
 C pi^2 / (2 b) kT: ~99 kT for C = 100 nm, b = 5 nm). The twist of a ring relaxes as a whole
 only through writhe: Tw + Wr = Lk (White 1969).
@@ -267,7 +267,7 @@ def initial_side_positions(chain_pos, arm_nm: float, first=(1.0, 0.0, 0.0)) -> n
     -------
     ndarray, shape (n - 1, 3)
     """
-    from ..geometry.twist import parallel_transport
+    from ..geometry.ribbon import parallel_transport
 
     p = np.asarray(chain_pos, float)
     t = np.diff(p, axis=0)

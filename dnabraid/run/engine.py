@@ -1,7 +1,13 @@
-"""Engine: Context, platform, Brownian integrator, time step, blow-up guards, state I/O."""
+"""Engine: Context, platform, Brownian integrator, time step, blow-up guards, state I/O.
+
+The engine takes a finished OpenMM ``System`` and :class:`IntegratorSettings` (as OpenMM's
+``Simulation`` takes a System and an integrator); it knows no scene. :meth:`Engine.for_model`
+builds one from a :class:`dnabraid.chains.Model`.
+"""
 
 from __future__ import annotations
 
+import dataclasses
 import logging
 import os
 
@@ -9,7 +15,9 @@ import numpy as np
 import openmm
 from openmm import unit as u
 
-from . import units
+from .. import units
+from ..errors import DnabraidError, UserError
+from .workers import usable_cores
 
 log = logging.getLogger(__name__)
 
@@ -106,7 +114,7 @@ def leimkuhler_matthews_integrator(temperature_K: float, dt_ps: float, masses_am
     return integ
 
 
-class PlatformError(ValueError):
+class PlatformError(UserError):
     """The requested OpenMM platform is not available here."""
 
 
@@ -118,28 +126,7 @@ def check_platform(platform: str) -> None:
                             + ", ".join(names))
 
 
-def _usable_cores() -> int:
-    try:
-        return len(os.sched_getaffinity(0))
-    except AttributeError:  # pragma: no cover - not on Linux
-        return os.cpu_count() or 1
-
-
-def pin_to_one_core() -> None:
-    """Pin this process to one core.
-
-    OpenMM's CPU platform hands forces to a worker thread; for small systems the hand-off
-    costs more than the force (measured up to 3-4x faster pinned;
-    workflows/benchmark_engine.py).
-    """
-    try:
-        cores = sorted(os.sched_getaffinity(0))
-        os.sched_setaffinity(0, {cores[0]})
-    except (AttributeError, OSError):  # pragma: no cover - not on Linux
-        pass
-
-
-class SimulationBlowUp(RuntimeError):
+class SimulationBlowUp(DnabraidError, RuntimeError):
     """The integration went unstable.
 
     Attributes
@@ -172,12 +159,46 @@ def available_platforms() -> list[str]:
     return [openmm.Platform.getPlatform(i).getName() for i in range(openmm.Platform.getNumPlatforms())]
 
 
+@dataclasses.dataclass(frozen=True)
+class IntegratorSettings:
+    """How the engine integrates: temperature, time step, scheme and noise signs.
+
+    Attributes
+    ----------
+    temperature_K : float
+    time_step_ns : float
+    integrator : str
+        'euler' (Euler-Maruyama) or 'lm' (Leimkuhler-Matthews).
+    noise_sign : tuple of 3 float or None
+        None: OpenMM's BrownianIntegrator for 'euler'; a sign per axis: the signed-noise
+        CustomIntegrators (the image of a mirror-coupled pair gets (1, -1, 1)).
+    """
+
+    temperature_K: float
+    time_step_ns: float
+    integrator: str = "euler"
+    noise_sign: tuple | None = None
+
+    def __post_init__(self):
+        if self.integrator not in INTEGRATORS:
+            raise ValueError(f"integrator must be one of {INTEGRATORS}, got "
+                             f"{self.integrator!r}")
+
+
 class Engine:
-    """Brownian dynamics of a built :class:`~dnabraid.chains.Model`.
+    """Brownian dynamics of a finished OpenMM System.
 
     Parameters
     ----------
-    model : Model
+    system : openmm.System
+    positions : ndarray (N, 3), nm
+    settings : IntegratorSettings
+    bonds : ndarray (n, 2), optional
+        Bonds checked after every :meth:`advance` (a bond stretched past
+        MAX_BOND_STRETCH x ``bond_length_nm`` is a blow-up).
+    bond_length_nm : float
+    terms : dict name -> force group, optional
+        The force terms a blow-up message may name.
     platform : str
         'CPU' (default), 'Reference', 'CUDA' or 'OpenCL'.
     seed : int
@@ -186,17 +207,15 @@ class Engine:
         CPU platform threads.
     """
 
-    def __init__(self, model, platform: str = "CPU", seed: int = 1,
-                 threads: int | None = None, integrator: str = "euler"):
-        self.model = model
-        scene = model.scene
-        self.dt_ns = model.timestep.time_step_ns
-        if integrator not in INTEGRATORS:
-            raise ValueError(f"integrator must be one of {INTEGRATORS}, got {integrator!r}")
-        self.integrator_name = integrator
-        #: None: OpenMM's BrownianIntegrator for 'euler'; a sign triple: the signed-noise
-        #: CustomIntegrators (a scene's ``noise_sign``, for mirror-coupled pairs)
-        self.noise_sign = getattr(scene, "noise_sign", None)
+    def __init__(self, system: openmm.System, positions, settings: IntegratorSettings, *,
+                 bonds=None, bond_length_nm: float = 0.0, terms: dict | None = None,
+                 platform: str = "CPU", seed: int = 1, threads: int | None = None):
+        self.system = system
+        self.settings = settings
+        self.terms = dict(terms or {})
+        self.dt_ns = settings.time_step_ns
+        self.integrator_name = settings.integrator
+        self.noise_sign = settings.noise_sign
         self.seed = integrator_seed(seed)
         check_platform(platform)
         self.platform = platform
@@ -206,7 +225,7 @@ class Engine:
             # threads the CPU platform's force sums depend on thread scheduling (measured:
             # one replica pair in three started 0.35 nm apart after minimisation)
             threads = 1
-        if platform == "CPU" and not threads and _usable_cores() == 1:
+        if platform == "CPU" and not threads and len(usable_cores()) == 1:
             # a process pinned to one core (replica workers, the tests): OpenMM would still
             # start one thread per machine core, which then take turns on that core
             # (measured for the default braid: 2.5-2.8k steps/s with 2 threads, 4.0-4.8k with 1)
@@ -215,12 +234,23 @@ class Engine:
             self._props["Threads"] = str(int(threads))
         if platform in ("CUDA", "OpenCL"):
             self._props["Precision"] = "mixed"
-        self._temperature_K = scene.temperature_K
+        self._temperature_K = settings.temperature_K
         self._make_context(self.seed)
-        self.context.setPositions(model.positions * u.nanometer)
+        self.context.setPositions(np.asarray(positions, float) * u.nanometer)
         self.step = 0
-        self._bonds = model.bonds
-        self._b = scene.bead_spacing_nm
+        self._bonds = np.zeros((0, 2), int) if bonds is None else np.asarray(bonds, int)
+        self._b = float(bond_length_nm)
+
+    @classmethod
+    def for_model(cls, model, *, integrator: str = "euler", noise_sign=None,
+                  platform: str = "CPU", seed: int = 1, threads: int | None = None) -> Engine:
+        """An engine for a :class:`dnabraid.chains.Model` at its own temperature and time
+        step, checking its strands' bonds."""
+        settings = IntegratorSettings(model.dna.temperature_K, model.timestep.time_step_ns,
+                                      integrator, noise_sign)
+        return cls(model.system, model.positions, settings, bonds=model.bonds,
+                   bond_length_nm=model.dna.bead_spacing_nm, terms=model.forces,
+                   platform=platform, seed=seed, threads=threads)
 
     def _make_context(self, openmm_seed: int) -> None:
         dt_ps = units.ns_to_ps(self.dt_ns)
@@ -228,7 +258,7 @@ class Engine:
             integ = openmm.BrownianIntegrator(self._temperature_K * u.kelvin,
                                               GAMMA_PER_PS / u.picosecond, dt_ps * u.picoseconds)
         else:
-            sysm = self.model.system
+            sysm = self.system
             masses = [sysm.getParticleMass(i).value_in_unit(u.dalton)
                       for i in range(sysm.getNumParticles())]
             make = (euler_maruyama_integrator if self.integrator_name == "euler"
@@ -238,7 +268,7 @@ class Engine:
         integ.setRandomNumberSeed(int(openmm_seed))
         integ.setConstraintTolerance(1e-6)
         self.integrator = integ
-        self.context = openmm.Context(self.model.system, integ,
+        self.context = openmm.Context(self.system, integ,
                                       openmm.Platform.getPlatformByName(self.platform),
                                       self._props)
 
@@ -352,7 +382,7 @@ class Engine:
     def largest_force_term(self) -> tuple[str, float]:
         """Name and size (pN) of the term with the largest force in the current state."""
         worst, fmax = "unknown", -1.0
-        for name, g in self.model.forces.items():
+        for name, g in self.terms.items():
             try:
                 f = self.forces_pN(groups=[g])
                 m = float(np.nanmax(np.abs(f))) if np.all(np.isfinite(f)) else float("inf")

@@ -1,6 +1,9 @@
-"""Protocols: schedules only (what the trap does, in which order), no sampling.
+"""The states a thermal scene samples, and in which order: schedules only, no sampling.
 
-:class:`TurnSchedule` is the magnetic-tweezer turn schedule: the turn values run as two
+A :class:`Schedule` is a list of :class:`Segment` s, one per state (point) of a run.
+:meth:`Schedule.single` is one equilibrium state (a scene whose state is fixed by its keys,
+such as the catenane at its Delta Lk and alpha). :class:`TurnSchedule` is the
+magnetic-tweezer turn schedule: the turn values run as two
 branches that start from the value nearest zero, upwards through the positive values,
 then, starting again from the state saved after the first value, downwards through the
 negative ones, so no turn is ramped twice. Each :class:`Segment` says where it starts
@@ -13,7 +16,7 @@ from __future__ import annotations
 import dataclasses
 import math
 
-__all__ = ["Segment", "TurnSchedule", "branches"]
+__all__ = ["Segment", "Schedule", "TurnSchedule", "branches"]
 
 
 def branches(turns) -> list[list[float]]:
@@ -38,6 +41,11 @@ class Segment:
     start_turns, turns : float
         Trap angle (turns) at the start and the target.
     ramp_steps, equilibration_steps, sample_steps : int
+    built_start : bool
+        The scene builds this segment's start (at ``start_turns``) instead of the shared
+        initial state.
+    label : str
+        Name of a state that is not a turn value (its point directory's tag).
     """
 
     index: int
@@ -47,6 +55,8 @@ class Segment:
     ramp_steps: int
     equilibration_steps: int
     sample_steps: int
+    built_start: bool = False
+    label: str = ""
 
     @property
     def steps(self) -> int:
@@ -54,10 +64,41 @@ class Segment:
 
     @property
     def tag(self) -> str:
+        if self.label:
+            return f"{self.index:03d}_{self.label}"
         return f"{self.index:03d}_turns{self.turns:+09.4f}"
 
 
-class TurnSchedule:
+class Schedule:
+    """The segments of a run, in run order; ``trap_parameter`` names the global parameter a
+    segment's turns drive (None: nothing is turned) and ``turn_rate`` its ramp speed."""
+
+    def __init__(self, segments=(), *, trap_parameter: str | None = None,
+                 turn_rate: float | None = None):
+        self.segments: list[Segment] = list(segments)
+        self.trap_parameter = trap_parameter
+        self.turn_rate = turn_rate
+
+    @classmethod
+    def single(cls, *, equilibration_steps: int, sample_steps: int, report_interval: int,
+               label: str = "equilibrium") -> Schedule:
+        """One state: equilibrate from the initial state, then sample."""
+        ri = int(report_interval)
+        return cls([Segment(0, None, 0.0, 0.0, 0, int(equilibration_steps),
+                            (int(sample_steps) // ri) * ri, label=label)])
+
+    @property
+    def total_steps(self) -> int:
+        return sum(s.steps for s in self.segments)
+
+    def __iter__(self):
+        return iter(self.segments)
+
+    def __len__(self):
+        return len(self.segments)
+
+
+class TurnSchedule(Schedule):
     """The tweezer schedule of a scene's turn values.
 
     ``mode = "independent"``: every turn value starts from the initial (equilibrium) state
@@ -76,8 +117,8 @@ class TurnSchedule:
 
     def __init__(self, turns, *, turn_rate: float | None, equilibration_steps: int,
                  sample_steps: int, report_interval: int, mode: str = "ramp",
-                 built_start: bool = False):
-        self.segments: list[Segment] = []
+                 built_start: bool = False, trap_parameter: str | None = None):
+        super().__init__(trap_parameter=trap_parameter, turn_rate=turn_rate)
         ri = int(report_interval)
         if mode == "independent":
             # every turn value from the initial state: no path dependence between points
@@ -89,7 +130,8 @@ class TurnSchedule:
                     start, ramp = t, 0
                 self.segments.append(Segment(len(self.segments), None, start, t, ramp,
                                              int(equilibration_steps),
-                                             (int(sample_steps) // ri) * ri))
+                                             (int(sample_steps) // ri) * ri,
+                                             built_start=built_start))
             return
         if mode != "ramp":
             raise ValueError(f"schedule mode must be 'ramp' or 'independent', got {mode!r}")
@@ -102,17 +144,10 @@ class TurnSchedule:
             for t in br:
                 ramp = 0 if turn_rate is None else int(math.ceil(abs(t - cur) / turn_rate))
                 ramp = int(math.ceil(ramp / ri)) * ri
+                # the first segment starts from a state the scene builds at 0 turns, if it
+                # builds starts; the others continue from earlier segments
                 seg = Segment(len(self.segments), prev, cur, t, ramp, int(equilibration_steps),
-                              (int(sample_steps) // ri) * ri)
+                              (int(sample_steps) // ri) * ri,
+                              built_start=built_start and prev is None)
                 self.segments.append(seg)
                 prev, cur = seg.index, t
-
-    @property
-    def total_steps(self) -> int:
-        return sum(s.steps for s in self.segments)
-
-    def __iter__(self):
-        return iter(self.segments)
-
-    def __len__(self):
-        return len(self.segments)

@@ -4,8 +4,8 @@ OpenMM's CPU platform pays a fixed cost per step and force (~0.1 ms for the defa
 83 particles, most of its step), so R small replicas in one Context cost far less than R
 Contexts (measured 2.0x at R = 2, 2.3x at R = 4 replica-steps per second on one core;
 ``workflows/benchmark_replicas.py``). Each replica keeps its own start (built from its own
-seed), observables, writers and blow-up checks (:func:`dnabraid.runner.run_packed`); only the
-integrator's random stream is shared, and it draws independent numbers for every particle,
+seed), observables, writers and blow-up checks (:func:`dnabraid.run.segments.run_members`);
+only the integrator's random stream is shared, and it draws independent numbers for every particle,
 so the copies stay statistically independent.
 
 Layout: copy r sits at the x-y offset of cell r of a square grid of side ``spacing`` centred
@@ -19,7 +19,7 @@ the run with a clear error instead of interacting silently.
 Global parameters (trap angle, force, stiffnesses) are shared: replicas of one point hold
 the same values. A force that cannot be copied makes a scene unpackable (:func:`packable`;
 it then runs one Context per replica) unless the model says how to build it over every
-copy (``model.extra["rebuild_forces"]``): the chiral ``PythonForce`` is built once over all
+copy (``model.rebuild_forces``): the chiral ``PythonForce`` is built once over all
 copies' strands, its own distance-based pair search never pairing two copies.
 """
 
@@ -31,11 +31,13 @@ import math
 import numpy as np
 import openmm
 
+from ..errors import DnabraidError
+
 __all__ = ["replicate_system", "packable", "pack_models", "Pack", "PackError", "grid_offsets",
            "group_replicas"]
 
 
-class PackError(RuntimeError):
+class PackError(DnabraidError, RuntimeError):
     """A packed copy left its cell (the copies could interact) or cannot be packed."""
 
 
@@ -68,9 +70,10 @@ def replicate_system(system: openmm.System, R: int, rebuild: dict | None = None
     Bonded, angle, compound-bond and external terms are copied with the index offset; a
     ``CustomNonbondedForce`` gets every copy's particles (same per-particle parameters) and
     exclusions. Force groups, names and global parameters are kept (shared by the copies).
-    ``rebuild`` maps a force's name to ``(make, chains)``: that force (a ``PythonForce``,
-    such as the chiral term) is made anew by ``make(all_chains)`` over every copy's chains
-    (``chains`` offset by r N), its own pair search keeping the copies apart.
+    ``rebuild`` maps a force's name to a :class:`dnabraid.chains.ForceRebuild`: that force
+    (a ``PythonForce``, such as the chiral term) is made anew by ``rebuild.make(all_chains)``
+    over every copy's chains (``rebuild.chains`` offset by r N), its own pair search keeping
+    the copies apart.
     """
     ok, why = packable(system, rebuild)
     if not ok:
@@ -87,8 +90,8 @@ def replicate_system(system: openmm.System, R: int, rebuild: dict | None = None
             out.addConstraint(i + r * N, j + r * N, d)
     for f in system.getForces():
         if rebuild and f.getName() in rebuild:
-            make, chains = rebuild[f.getName()]
-            g = make([np.asarray(c, int) + r * N for r in range(R) for c in chains])
+            rb = rebuild[f.getName()]
+            g = rb.make([np.asarray(c, int) + r * N for r in range(R) for c in rb.chains])
             g.setForceGroup(f.getForceGroup())
             out.addForce(g)
             continue
@@ -233,11 +236,8 @@ def pack_models(members: list, *, spacing_nm: float | None = None,
         raise PackError("replicas to pack have different particle counts")
     cut = nonbonded_cutoff_nm(m0.system)
     if reach_nm is None:
-        s = m0.scene
         ext = max(float(np.max(np.abs(m.positions[:, :2]))) for m in members)
-        L = float(getattr(s, "length_nm", 0.0))
-        F = float(getattr(s, "force_pN", 0.0) or 0.0)
-        kT = float(getattr(s, "kT", 4.11))
+        L, F, kT = m0.length_nm, m0.force_pN, m0.dna.kT
         thermal = 8.0 * math.sqrt(kT * L / F) + 20.0 if F > 0 else L
         reach_nm = ext + min(L, thermal) if L > 0 else ext + 50.0
     spacing = spacing_nm if spacing_nm is not None else 2.0 * reach_nm + cut
@@ -246,7 +246,7 @@ def pack_models(members: list, *, spacing_nm: float | None = None,
                             for r in range(len(members))])
     else:
         offsets = grid_offsets(len(members), spacing)
-    system = replicate_system(m0.system, len(members), m0.extra.get("rebuild_forces"))
+    system = replicate_system(m0.system, len(members), m0.rebuild_forces)
     N = len(m0.positions)
     bonds = np.concatenate([m.bonds + r * N for r, m in enumerate(members)]) \
         if len(m0.bonds) else m0.bonds

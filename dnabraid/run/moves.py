@@ -37,7 +37,7 @@ ring's Tw + Wr are unchanged, so no move passes a strand through another or a jo
 through pi); a proposal it refuses is rejected, which keeps detailed balance within the
 allowed set (the topological class of the start).
 
-Brownian steps and moves alternate (:func:`dnabraid.runner._run_members` calls
+Brownian steps and moves alternate (:func:`dnabraid.run.segments.run_members` calls
 :func:`apply_moves` after every report interval of equilibration and sampling). With the
 Leimkuhler-Matthews integrator, the previous step's noise is kept across a move; the
 single ring's exact twist variance shows no effect at the few-% level (tests).
@@ -244,13 +244,13 @@ class RigidMoves:
 
 
 def apply_moves(engine, members) -> None:
-    """One call of every member's ``model.extra['moves']`` on a (packed) engine.
+    """One call of every member's ``model.moves`` on a (packed) engine.
 
     Each member is moved in its own frame (``member.sl``, ``member.offset``); copies in one
     Context do not interact, so the total energy's change is the moved copy's.
     """
     for m in members:
-        mv = m.model.extra.get("moves")
+        mv = m.model.moves
         if mv is None:
             continue
         state = {"pos": engine.positions()}

@@ -125,7 +125,7 @@ def read_point(path: str) -> tuple[dict, dict]:
 
 def mean_sem_entry(x) -> dict:
     """Mean and autocorrelation-corrected SEM of one series (the single-run diagnostic)."""
-    from .analysis.stats import mean_sem
+    from ..analysis.stats import mean_sem
 
     x = np.asarray(x, float)
     if x.size == 0 or not np.all(np.isfinite(x)):

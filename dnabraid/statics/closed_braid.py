@@ -14,8 +14,8 @@ harmonic bonds (the strands are inextensible; strain < 1e-5), hinges
 ``U = k/2 (Delta - r)^2`` for ``r < Delta`` whose stiffness is set from the expected
 contact force so that the overlap is ``overlap_target`` x Delta (checked < 1 % after
 relaxation). The contact is either between beads (``contact = "beads"``, as in
-:mod:`dnabraid.knot`) or between the chain's segments (``contact = "segments"``, the smooth
-capsule contact of :mod:`dnabraid.forces.segment_contact`).
+:mod:`dnabraid.statics.open_knot`) or between the chain's segments (``contact =
+"segments"``, the smooth capsule contact of :mod:`dnabraid.forces.segment_contact`).
 
 No twist: at zero temperature an isotropic rod whose material frame is not closed (or
 whose ``Lk_i`` equals its writhe) carries no twisting moment, and the centre lines are
@@ -34,9 +34,9 @@ From the uniform closed ply (strands on a torus of tube radius ``Delta/2``; ``si
 pi n_ply Delta / L`` with ``n_ply = n`` for a link and ``n/2`` for a knot), with a small random
 perturbation (``start_noise``, fixed seed) that breaks every symmetry of the start, so that
 the symmetry of the relaxed braid is found, not imposed. :func:`relax` is the damped Newton
-method of :mod:`dnabraid.knot` (L-BFGS does not converge on the curved sliding valleys; see
-that module's docstring) on the sparse Hessian (Gauss-Newton far from the minimum, exact
-near it), for periodic chains: six coordinates are held to pin the rigid-body modes
+method of :mod:`dnabraid.statics.newton` (L-BFGS does not converge on the curved sliding
+valleys; see that module's docstring) on the sparse Hessian (Gauss-Newton far from the
+minimum, exact near it), for periodic chains: six coordinates are held to pin the rigid-body modes
 (translations and rotations; the rotation about the torus axis is the "ply phase" of the
 uniform start), and at a stationary point the lowest eigenvalue of the exact pinned
 Hessian is checked (saddles are escaped along their negative mode).
@@ -58,26 +58,23 @@ of period 2n). Gauss linking number and writhe per ring come from
 from __future__ import annotations
 
 import dataclasses
-import logging
 import math
 import time
 
 import numpy as np
 import scipy.sparse as sp
-import scipy.sparse.linalg as spla
 from scipy.optimize import brentq
 from scipy.spatial import cKDTree
 
-from .continuum.closed import LINK, TOPOLOGIES
-from .forces.contact import contact_exclusion_range
-from .knot import _pair_blocks, hinge_blocks  # shared with the open knot
-
-log = logging.getLogger(__name__)
+from ..continuum.closed_ply import LINK, TOPOLOGIES
+from ..errors import DnabraidError
+from ..forces.contact import contact_exclusion_range
+from . import newton
 
 CONTACT_MODELS = ("beads", "segments")
 
 
-class ClosedError(RuntimeError):
+class ClosedError(DnabraidError, RuntimeError):
     """A closed braid could not be built, relaxed or measured (says where and why)."""
 
 
@@ -85,8 +82,8 @@ class ClosedError(RuntimeError):
 
 def ply_turns(topology: str, n: int) -> float:
     """Turns of the strands about each other per strand length L: n (link), n/2 (knot)
-    (:func:`dnabraid.continuum.closed.ply_turns`, which also checks n)."""
-    from .continuum.closed import ply_turns as _ply_turns
+    (:func:`dnabraid.continuum.closed_ply.ply_turns`, which also checks n)."""
+    from ..continuum.closed_ply import ply_turns as _ply_turns
 
     return _ply_turns(n, topology)
 
@@ -351,7 +348,7 @@ def make_chains(sizes, exclusion: int) -> Chains:
 
 def _segment_module():
     try:
-        from .forces import segment_contact
+        from ..forces import segment_contact
     except ImportError as exc:
         raise ClosedError("contact='segments' needs dnabraid.forces.segment_contact, which "
                           "this installation lacks; use contact='beads'") from exc
@@ -425,57 +422,6 @@ def contact_energy(x, prob: Problem) -> float:
     return 0.5 * br.contact_stiffness_pN_nm * float(np.sum((br.diameter_nm - rr) ** 2))
 
 
-class _Assembler:
-    def __init__(self, N):
-        self.N = N
-        self.g = np.zeros((N, 3))
-        self.rows, self.cols, self.vals = [], [], []
-
-    def block(self, a, c, blk):
-        ia = (3 * a)[:, None, None] + np.arange(3)[None, :, None]
-        ic = (3 * c)[:, None, None] + np.arange(3)[None, None, :]
-        self.rows.append(np.broadcast_to(ia, blk.shape).ravel())
-        self.cols.append(np.broadcast_to(ic, blk.shape).ravel())
-        self.vals.append(blk.ravel())
-
-    def pair(self, i, j, gd, Hd):
-        """U(d), d = x_j - x_i."""
-        np.add.at(self.g, j, gd)
-        np.add.at(self.g, i, -gd)
-        for a, sa in ((i, -1.0), (j, 1.0)):
-            for c, sc in ((i, -1.0), (j, 1.0)):
-                self.block(a, c, sa * sc * Hd)
-
-    def matrix(self):
-        n3 = 3 * self.N
-        if not self.vals:
-            return sp.csr_matrix((n3, n3))
-        return sp.coo_matrix((np.concatenate(self.vals),
-                              (np.concatenate(self.rows), np.concatenate(self.cols))),
-                             shape=(n3, n3)).tocsr()
-
-
-def _hinge_terms(asm: _Assembler, x, hinges, kappa: float) -> None:
-    """U = kappa (1 - c) for each hinge (i0, i1, i2), c = u.v/(|u||v|): gradient and exact Hessian."""
-    i0, i1, i2 = hinges[:, 0], hinges[:, 1], hinges[:, 2]
-    u, v = x[i1] - x[i0], x[i2] - x[i1]
-    Gu, Gv, Huu, Hvv, Huv = hinge_blocks(u, v, kappa)
-    np.add.at(asm.g, i0, -Gu)
-    np.add.at(asm.g, i1, Gu - Gv)
-    np.add.at(asm.g, i2, Gv)
-    idx = (i0, i1, i2)
-    Ju = (-1.0, 1.0, 0.0)
-    Jv = (0.0, -1.0, 1.0)
-    HvuT = np.transpose(Huv, (0, 2, 1))
-    for A in range(3):
-        for C in range(3):
-            if not (Ju[A] or Jv[A]) or not (Ju[C] or Jv[C]):
-                continue
-            blk = (Ju[A] * Ju[C]) * Huu + (Jv[A] * Jv[C]) * Hvv + \
-                (Ju[A] * Jv[C]) * Huv + (Jv[A] * Ju[C]) * HvuT
-            asm.block(idx[A], idx[C], blk)
-
-
 def gradient_hessian(x, prob: Problem, *, gauss_newton: bool = True, terms=None):
     """Gradient (3N,) and sparse Hessian (3N x 3N, CSR) of :func:`energy`.
 
@@ -485,15 +431,16 @@ def gradient_hessian(x, prob: Problem, *, gauss_newton: bool = True, terms=None)
     br, ch = prob.braid, prob.chains
     terms = ("stretch", "bend", "contact") if terms is None else terms
     N = len(x)
-    asm = _Assembler(N)
+    asm = newton.HessianAssembler(N)
     if "stretch" in terms:
         i, j = ch.bonds[:, 0], ch.bonds[:, 1]
         d = x[j] - x[i]
         r = np.linalg.norm(d, axis=1)
-        gd, Hd = _pair_blocks(d, r, br.bond_stiffness_pN_nm, br.bead_spacing_nm, gauss_newton)
+        gd, Hd = newton.pair_blocks(d, r, br.bond_stiffness_pN_nm, br.bead_spacing_nm,
+                                    gauss_newton)
         asm.pair(i, j, gd, Hd)
     if "bend" in terms:
-        _hinge_terms(asm, x, ch.hinges, br.bending_stiffness_pN_nm2 / br.bead_spacing_nm)
+        asm.hinges(x, ch.hinges, br.bending_stiffness_pN_nm2 / br.bead_spacing_nm)
     H_extra = None
     if "contact" in terms:
         if br.contact == "segments":
@@ -509,8 +456,8 @@ def gradient_hessian(x, prob: Problem, *, gauss_newton: bool = True, terms=None)
             if len(p):
                 dc = x[p[:, 1]] - x[p[:, 0]]
                 rc = np.linalg.norm(dc, axis=1)
-                gd, Hd = _pair_blocks(dc, rc, br.contact_stiffness_pN_nm, br.diameter_nm,
-                                      gauss_newton)
+                gd, Hd = newton.pair_blocks(dc, rc, br.contact_stiffness_pN_nm, br.diameter_nm,
+                                            gauss_newton)
                 asm.pair(p[:, 0], p[:, 1], gd, Hd)
     H = asm.matrix()
     if H_extra is not None:
@@ -562,7 +509,8 @@ def pinned_dofs(x) -> np.ndarray:
 
 def relax(braid: ClosedBraid, x0, *, gtol_pN: float | None = None, max_iter: int = 400,
           max_escapes: int = 50, check_saddle: bool = True, progress=None) -> dict:
-    """Damped Newton minimisation of the closed braid's energy from ``x0`` ((N, 3), nm).
+    """Damped Newton minimisation of the closed braid's energy from ``x0`` ((N, 3), nm),
+    by :func:`dnabraid.statics.newton.minimize`.
 
     Stops when the largest force component is below ``gtol_pN`` (default 1e-6 x the
     contact force per bead, p_scale b). The rigid-body modes are pinned: six coordinates
@@ -584,107 +532,44 @@ def relax(braid: ClosedBraid, x0, *, gtol_pN: float | None = None, max_iter: int
     t0 = time.perf_counter()
     prob = make_problem(braid)
     f_scale = braid.pressure_scale_pN_per_nm * braid.bead_spacing_nm
-    gtol = 1e-6 * f_scale if gtol_pN is None else float(gtol_pN)
-    x = np.asarray(x0, float).copy()
-    n3 = x.size
-    free = np.setdiff1d(np.arange(n3), pinned_dofs(x))
-    E = energy(x, prob)
     soft = braid.bending_stiffness_pN_nm2 / braid.bead_spacing_nm**3
-    mu_min = 1e-12 * soft
-    mu = 1e-6 * soft
-    gmax = math.inf
-    escapes = 0
-    lam = None
-    it = 0
-    fails = 0
-    for it in range(1, max_iter + 1):
-        g_full, H = gradient_hessian(x, prob, gauss_newton=True)
-        if not np.all(np.isfinite(g_full)):
-            raise ClosedError(f"non-finite force at Newton iteration {it}")
-        gmax = float(np.abs(g_full).max())
-        if progress:
-            progress(it, gmax)
-        exact = gmax < 1e-3 * f_scale
-        if exact:
-            _, H = gradient_hessian(x, prob, gauss_newton=False)
-        if gmax < gtol or fails >= 3:
-            if not check_saddle:
-                break
-            lam, vec = lowest_mode(x, prob, free=free)
-            if lam >= -1e-9 * soft:
-                break
-            escapes += 1
-            if escapes > max_escapes:
-                raise ClosedError(f"still at a saddle (curvature {lam:.3g} pN/nm) after "
-                                  f"{max_escapes} escapes at Newton iteration {it}")
-            v = vec.reshape(-1, 3) * (0.1 * braid.radius_nm / np.abs(vec).max())
-            E, s = min((energy(x + s * v, prob), s) for s in (1.0, -1.0))
-            x = x + s * v
-            mu, fails = 1e-6 * soft, 0
-            continue
-        g = g_full[free]
-        Hf = H[free][:, free]
-        accepted = False
-        for _ in range(40):
-            A = (Hf + mu * sp.identity(len(free), format="csr")).tocsc()
-            try:
-                step = spla.spsolve(A, -g)
-            except RuntimeError:
-                step = None
-            if step is None or not np.all(np.isfinite(step)) or step @ g >= 0:
-                mu = max(10.0 * mu, mu_min)
-                continue
-            smax = float(np.abs(step).max())
-            t = min(1.0, 0.25 * braid.radius_nm / smax)  # never jump across the rod
-            full = np.zeros(n3)
-            for _ls in range(12):
-                full[free] = t * step
-                xn = x + full.reshape(-1, 3)
-                En = energy(xn, prob)
-                if En <= E + 1e-4 * t * (step @ g):
-                    accepted = True
-                    break
-                t *= 0.5
-            if accepted:
-                dE = En - E
-                log.debug("it %d E %.17g dE %.3g t %.3g mu %.3g smax %.3g exact %s", it, En,
-                          En - E, t, mu, smax, exact)
-                fails = fails + 1 if abs(dE) <= 1e-14 * abs(E) else 0
-                x, E = xn, En
-                # Levenberg-Marquardt: trust the quadratic model more after a full step,
-                # less after a cut one (a soft, non-quadratic sliding direction)
-                mu = max(mu / 3.0, mu_min) if t == 1.0 else max(mu * 4.0 / t, mu_min)
-                break
-            mu = max(10.0 * mu, mu_min)
-        if not accepted:
-            fails += 1   # no descent left within round-off: a (numerically) stationary point
+    settings = newton.NewtonSettings(
+        gtol=1e-6 * f_scale if gtol_pN is None else float(gtol_pN),
+        max_step=0.25 * braid.radius_nm, escape_step=0.1 * braid.radius_nm,
+        mu_start=1e-6 * soft, mu_min=1e-12 * soft, saddle_tol=1e-9 * soft,
+        max_iter=max_iter, max_escapes=max_escapes, max_damping_tries=40, max_halvings=12,
+        exact_below=1e-3 * f_scale, adaptive_damping=True, stall_limit=3)
+    pinned = pinned_dofs(x0)
+    free = np.setdiff1d(np.arange(np.size(x0)), pinned)
+    try:
+        res = newton.minimize(
+            x0, lambda x: energy(x, prob),
+            lambda x, gn: gradient_hessian(x, prob, gauss_newton=gn), settings, pinned=pinned,
+            lowest_mode=(lambda x: lowest_mode(x, prob, free=free)) if check_saddle else None,
+            progress=progress)
+    except newton.NewtonError as exc:
+        raise ClosedError(str(exc)) from exc
+    x = res["x"]
     terms = energy_terms(x, prob)
     overlap = max_overlap(x, prob)
     if overlap > 0.5 * braid.diameter_nm:
         raise ClosedError(f"strands passed through each other during relaxation (overlap "
                           f"{overlap:.3g} nm > Delta/2): lower spacing_over_radius")
-    return {"x": x, "iterations": it, "max_force_pN": gmax, "energy_pN_nm": E,
-            "converged": gmax < gtol or (fails >= 3 and gmax < 1e2 * gtol), "gtol_pN": gtol,
-            "saddle_escapes": escapes, "lowest_curvature_pN_per_nm": lam,
-            "wall_time_s": time.perf_counter() - t0, "terms_pN_nm": terms}
+    return {**res, "gtol_pN": settings.gtol, "wall_time_s": time.perf_counter() - t0,
+            "terms_pN_nm": terms}
 
 
 def lowest_mode(x, prob: Problem, free=None):
     """Lowest eigenvalue (pN/nm) and eigenvector (3N,) of the exact Hessian with the rigid
     modes pinned (``free``: the unpinned flat coordinates; default :func:`pinned_dofs`)."""
     _, H = gradient_hessian(x, prob, gauss_newton=False)
-    n3 = H.shape[0]
     if free is None:
-        free = np.setdiff1d(np.arange(n3), pinned_dofs(x))
-    Hf = H[free][:, free].tocsc()
+        free = np.setdiff1d(np.arange(H.shape[0]), pinned_dofs(x))
     shift = 1e-3 * prob.braid.bending_stiffness_pN_nm2 / prob.braid.bead_spacing_nm**3
     try:
-        lam, vec = spla.eigsh(Hf, k=1, sigma=-shift, which="LM")
-    except Exception as exc:  # noqa: BLE001 - ARPACK failures are reported, not fatal
-        raise ClosedError(f"could not compute the Hessian's lowest mode: {exc}") from exc
-    v = np.zeros(n3)
-    v[free] = vec[:, 0]
-    return float(lam[0]), v
+        return newton.lowest_mode(H, shift=shift, free=free)
+    except newton.NewtonError as exc:
+        raise ClosedError(str(exc)) from exc
 
 
 def max_overlap(x, prob: Problem) -> float:
@@ -889,7 +774,7 @@ def measure(x, braid: ClosedBraid, *, smooth_over_diameter: float = 1.0) -> dict
     out["pressure_symmetry"] = symmetry(ps, npk)
     out["eta_symmetry"] = symmetry(es, nek)
     out["eta_symmetry_half"] = symmetry(es, npk) if braid.is_link else None
-    from .geometry.curves import gauss_linking_number, writhe
+    from ..geometry.curves import gauss_linking_number, writhe
 
     rings = [x[ch.ring(k)] for k in range(len(ch.sizes))]
     out["writhe_per_ring"] = [float(writhe(r)) for r in rings]
@@ -921,24 +806,25 @@ def continuum_reference(braid: ClosedBraid) -> dict:
 
     ``eta_uniform`` and ``pressure_uniform_torque_free`` (:func:`uniform_ply_pressure`)
     always; under ``continuum`` the closed-form functions of
-    :mod:`dnabraid.continuum.closed` (the axis-curvature corrections): ``eta_rad``,
+    :mod:`dnabraid.continuum.closed_ply` (the axis-curvature corrections): ``eta_rad``,
     ``eta_mean_rad``/``eta_min_rad``/``eta_max_rad`` (O(eps^2) expansion),
     ``pressure_uniform_B_per_L3``, ``pressure_mean_B_per_L3`` (Eq. 4),
     ``pressure_mean_torus_B_per_L3`` (virtual work on the torus family),
     ``writhe_per_ring`` (formula), ``writhe_per_ring_fuller``, ``energy_torus_B_per_L`` (the
     torus helix, an upper bound of the relaxed energy), ``contact_curvature_per_L`` (1/R).
     Each is taken only if that function exists and succeeds (``continuum_error`` lists the
-    others); the full :func:`~dnabraid.continuum.closed.closed_ply` result is not called,
+    others); the full :func:`~dnabraid.continuum.closed_ply.closed_ply` result is not called,
     to keep the scene fast.
     """
     s = braid.sin_theta
     out = {"eta_uniform": 2 * math.asin(s),
            "pressure_uniform_torque_free": uniform_ply_pressure(s, 0.5 * braid.diameter_over_length),
-           "source": "sin theta = pi n_ply Delta/L, p = B sin^4 theta / r^3 (dnabraid.closed)"}
+           "source": "sin theta = pi n_ply Delta/L, p = B sin^4 theta / r^3 "
+                     "(dnabraid.statics.closed_braid)"}
     try:
-        from .continuum import closed as cc
+        from ..continuum import closed_ply as cc
     except ImportError as exc:
-        out["continuum_error"] = f"dnabraid.continuum.closed unavailable: {exc}"
+        out["continuum_error"] = f"dnabraid.continuum.closed_ply unavailable: {exc}"
         return out
     args = (braid.n, braid.diameter_over_length, braid.topology)
     calls = {
@@ -964,7 +850,7 @@ def continuum_reference(braid: ClosedBraid) -> dict:
             if f"eta_{k}" in eta:
                 vals[f"eta_{k}_rad"] = float(eta[f"eta_{k}"])
     out["continuum"] = {k: float(v) for k, v in vals.items()}
-    out["source"] += "; dnabraid.continuum.closed"
+    out["source"] += "; dnabraid.continuum.closed_ply"
     if errors:
         out["continuum_error"] = "; ".join(errors)
     return out

@@ -22,10 +22,11 @@ The start is the asymptotic shape itself: straight tails along z, a braid of len
 minimum of the energy. Plain L-BFGS (OpenMM's ``LocalEnergyMinimizer``, scipy's) does
 *not* get there: the slow mode is the rod sliding through the braid, which in Cartesian
 coordinates is a curved valley (measured: 18000 L-BFGS iterations moved the loop by
-< 1 % for a 737-bead trefoil). :func:`relax` is a damped Newton method on the exact
-sparse Hessian (bonds and contacts Gauss-Newton, hinges exact), which converges in tens of
-iterations; the forces at its end are checked against OpenMM's (the same System the
-scene would integrate) and the largest OpenMM force left is reported.
+< 1 % for a 737-bead trefoil). :func:`relax` runs the damped Newton method of
+:mod:`dnabraid.statics.newton` on the exact sparse Hessian (bonds and contacts
+Gauss-Newton, hinges exact), which converges in tens of iterations; the forces at its end
+are checked against OpenMM's (the same System the scene would integrate) and the largest
+OpenMM force left is reported.
 
 What is measured (:func:`measure`) and against which theory
 ------------------------------------------------------------
@@ -38,7 +39,7 @@ What is measured (:func:`measure`) and against which theory
   force ``N`` (zero only as eps -> 0);
 * braid length ``l``: the distance between the outermost apparent crossings of the two
   strands seen along the loop's normal (seed 002: ``v(w_c) = 0``); against
-  ``l = 2 w_c sqrt(2 h R)`` (seed 002, Eq. 7; ``w_c`` from :mod:`dnabraid.continuum.knot`);
+  ``l = 2 w_c sqrt(2 h R)`` (seed 002, Eq. 7; ``w_c`` from :mod:`dnabraid.continuum.knot_braid`);
 * helical wave number ``k = |d phi / dz|`` of the strands' half-difference in the middle
   half of the braid; against ``k = (sqrt(12) h R)^(-1/2)`` (seed 001, Eq. 3);
 * the winding of the half-difference between the outermost crossings: ``2 pi n`` for
@@ -57,19 +58,19 @@ import math
 import time
 
 import numpy as np
-import scipy.sparse as sp
-import scipy.sparse.linalg as spla
 from scipy.spatial import cKDTree
 
-from .forces import segment_contact as segc
-from .forces.contact import contact_exclusion_range
+from ..forces import segment_contact as segc
+from ..errors import DnabraidError
+from ..forces.contact import contact_exclusion_range
+from . import newton
 
 #: Self-contact models of the rod: between beads (spheres of radius h) or between the
 #: segments joining them (a tube of radius h round the polyline; see issue 14, item 1).
 CONTACT_MODELS = ("beads", "segments")
 
 
-class KnotError(RuntimeError):
+class KnotError(DnabraidError, RuntimeError):
     """The knot could not be relaxed or measured (says where and why)."""
 
 
@@ -112,7 +113,7 @@ class KnotRod:
 
 def w_c(n: int) -> float:
     """Apparent-crossing abscissa w_c of the difference problem (seed 002; computed)."""
-    from .continuum import knot as ck
+    from ..continuum import knot_braid as ck
 
     if n == 1:
         return ck.W_C_TREFOIL
@@ -231,40 +232,6 @@ def energy(x, prob: _Problem) -> float:
     return float(sum(energy_terms(x, prob).values()))
 
 
-def _pair_blocks(d, r, k: float, r0: float, gauss_newton: bool):
-    """Gradient wrt the pair vector d and its 3x3 Hessian for U = k/2 (r - r0)^2."""
-    u = d / r[:, None]
-    g = (k * (r - r0))[:, None] * u
-    uu = u[:, :, None] * u[:, None, :]
-    fac = k * (r - r0) / r
-    if gauss_newton:
-        fac = np.maximum(fac, 0.0)
-    return g, k * uu + fac[:, None, None] * (np.eye(3) - uu)
-
-
-def hinge_blocks(u, v, kappa: float):
-    """U = kappa (1 - c), c = u.v / (|u||v|), for bond vectors u, v (m, 3): the gradient
-    with respect to u and v and the exact 3x3 Hessian blocks (uu, vv, uv)."""
-    a, bv = np.linalg.norm(u, axis=1), np.linalg.norm(v, axis=1)
-    uh, vh = u / a[:, None], v / bv[:, None]
-    c = np.sum(uh * vh, axis=1)
-    gu = (vh - c[:, None] * uh) / a[:, None]
-    gv = (uh - c[:, None] * vh) / bv[:, None]
-    I3 = np.eye(3)
-
-    def outer(p_, q_):
-        return p_[:, :, None] * q_[:, None, :]
-
-    Huu = -(outer(uh, gu) + outer(gu, uh)) / a[:, None, None] - \
-        (c / a**2)[:, None, None] * (I3 - outer(uh, uh))
-    Hvv = -(outer(vh, gv) + outer(gv, vh)) / bv[:, None, None] - \
-        (c / bv**2)[:, None, None] * (I3 - outer(vh, vh))
-    Huv = (I3 - outer(uh, uh) - outer(vh, vh) + c[:, None, None] * outer(uh, vh)) / \
-        (a * bv)[:, None, None]
-    # U = -kappa c (+ const): dU/du = -kappa gu ...
-    return -kappa * gu, -kappa * gv, -kappa * Huu, -kappa * Hvv, -kappa * Huv
-
-
 def gradient_hessian(x, prob: _Problem, *, gauss_newton: bool = True):
     """Gradient (3N,) and sparse Hessian (3N x 3N, CSR) of :func:`energy`.
 
@@ -274,67 +241,33 @@ def gradient_hessian(x, prob: _Problem, *, gauss_newton: bool = True):
     rod = prob.rod
     N = len(x)
     b = rod.bead_spacing_nm
-    g = np.zeros((N, 3))
-    rows, cols, vals = [], [], []
-
-    def add_pair(i, j, gd, Hd):
-        # U(d), d = x_j - x_i
-        np.add.at(g, j, gd)
-        np.add.at(g, i, -gd)
-        for (a, sa) in ((i, -1.0), (j, 1.0)):
-            for (c, sc) in ((i, -1.0), (j, 1.0)):
-                ia = (3 * a)[:, None, None] + np.arange(3)[None, :, None]
-                ic = (3 * c)[:, None, None] + np.arange(3)[None, None, :]
-                rows.append(np.broadcast_to(ia, Hd.shape).ravel())
-                cols.append(np.broadcast_to(ic, Hd.shape).ravel())
-                vals.append((sa * sc * Hd).ravel())
-
+    asm = newton.HessianAssembler(N)
     # bonds
     i = np.arange(N - 1)
     d = x[1:] - x[:-1]
     r = np.linalg.norm(d, axis=1)
-    gd, Hd = _pair_blocks(d, r, rod.stretch_modulus_pN / b, b, gauss_newton)
-    add_pair(i, i + 1, gd, Hd)
+    gd, Hd = newton.pair_blocks(d, r, rod.stretch_modulus_pN / b, b, gauss_newton)
+    asm.pair(i, i + 1, gd, Hd)
     # contacts
     p = _pairs(x, rod) if rod.contact == "beads" else ()
     if len(p):
         dc = x[p[:, 1]] - x[p[:, 0]]
         rc = np.linalg.norm(dc, axis=1)
-        gd, Hd = _pair_blocks(dc, rc, rod.contact_stiffness_pN_nm, 2 * rod.thickness_nm, gauss_newton)
-        add_pair(p[:, 0], p[:, 1], gd, Hd)
+        gd, Hd = newton.pair_blocks(dc, rc, rod.contact_stiffness_pN_nm, 2 * rod.thickness_nm,
+                                    gauss_newton)
+        asm.pair(p[:, 0], p[:, 1], gd, Hd)
     # hinges: U = kappa (1 - c), c = u.v / (|u||v|), u = x1 - x0, v = x2 - x1
-    kappa = rod.bending_stiffness_pN_nm2 / b
-    u, v = d[:-1], d[1:]
-    Gu, Gv, Huu, Hvv, Huv = hinge_blocks(u, v, kappa)
     j0 = np.arange(N - 2)
-    np.add.at(g, j0, -Gu)
-    np.add.at(g, j0 + 1, Gu - Gv)
-    np.add.at(g, j0 + 2, Gv)
-    # x-derivatives: du/dx0 = -1, du/dx1 = +1, dv/dx1 = -1, dv/dx2 = +1
-    Ju = {0: -1.0, 1: 1.0, 2: 0.0}
-    Jv = {0: 0.0, 1: -1.0, 2: 1.0}
-    for A in range(3):
-        for Cc in range(3):
-            blk = (Ju[A] * Ju[Cc]) * Huu + (Jv[A] * Jv[Cc]) * Hvv + \
-                (Ju[A] * Jv[Cc]) * Huv + (Jv[A] * Ju[Cc]) * np.transpose(Huv, (0, 2, 1))
-            if not (Ju[A] or Jv[A]) or not (Ju[Cc] or Jv[Cc]):
-                continue
-            ia = (3 * (j0 + A))[:, None, None] + np.arange(3)[None, :, None]
-            ic = (3 * (j0 + Cc))[:, None, None] + np.arange(3)[None, None, :]
-            rows.append(np.broadcast_to(ia, blk.shape).ravel())
-            cols.append(np.broadcast_to(ic, blk.shape).ravel())
-            vals.append(blk.ravel())
+    asm.hinges(x, np.column_stack([j0, j0 + 1, j0 + 2]), rod.bending_stiffness_pN_nm2 / b)
     # pull and sideways restraints
+    g = asm.g
     g[0, 2] += rod.tension_pN
     g[-1, 2] -= rod.tension_pN
     cl = prob.clamped
     g[cl, :2] += prob.k_side * (x[cl, :2] - prob.anchors)
     for ax in range(2):
-        rows.append(3 * cl + ax)
-        cols.append(3 * cl + ax)
-        vals.append(np.full(len(cl), prob.k_side))
-    H = sp.coo_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
-                      shape=(3 * N, 3 * N)).tocsr()
+        asm.diagonal(3 * cl + ax, np.full(len(cl), prob.k_side))
+    H = asm.matrix()
     if rod.contact == "segments":
         gc, Hc = segc.contact_gradient_hessian(
             x, segc.chain_segments(N), _segment_pairs(x, rod), 2.0 * rod.thickness_nm,
@@ -353,80 +286,39 @@ def make_problem(rod: KnotRod, x0) -> _Problem:
 
 def relax(rod: KnotRod, x0, *, gtol_pN: float | None = None, max_iter: int = 2000,
           max_escapes: int = 200, progress=None) -> dict:
-    """Damped Newton minimisation of the knot energy from ``x0``.
+    """Damped Newton minimisation of the knot energy from ``x0``, by
+    :func:`dnabraid.statics.newton.minimize`.
 
-    Stops when the largest force component is below ``gtol_pN`` (default 1e-6 T).
-    Returns dict(x, iterations, max_force_pN, energy_pN_nm, wall_time_s, converged).
+    Stops when the largest force component is below ``gtol_pN`` (default 1e-6 T) and the
+    exact Hessian has no negative curvature (the z-translation, a zero mode of the pulled
+    rod, left out); saddles are escaped along their lowest mode by h/2.
+    Returns dict(x, iterations, max_force_pN, energy_pN_nm, wall_time_s, converged,
+    saddle_escapes, lowest_curvature_pN_per_nm, terms_pN_nm).
     Raises KnotError on non-finite values (naming the iteration) or when the strands
     passed through each other (the contact overlap exceeded h).
     """
     t0 = time.perf_counter()
     prob = make_problem(rod, x0)
-    gtol = 1e-6 * rod.tension_pN if gtol_pN is None else float(gtol_pN)
-    x = np.asarray(x0, float).copy()
-    E = energy(x, prob)
-    mu = 1e-8 * rod.stretch_modulus_pN / rod.bead_spacing_nm
-    it = 0
-    escapes = 0
-    gmax = math.inf
-    for it in range(1, max_iter + 1):
-        g, H = gradient_hessian(x, prob)
-        gmax = float(np.abs(g).max())
-        if not math.isfinite(gmax):
-            raise KnotError(f"non-finite force at Newton iteration {it}")
-        if progress:
-            progress(it, gmax)
-        if gmax < gtol:
-            # Newton is attracted by saddles as much as by minima: escape along the
-            # lowest-curvature mode while the (exact) Hessian has a negative eigenvalue.
-            lam, vec = _lowest_mode(x, prob)
-            if lam >= -1e-9 * rod.stretch_modulus_pN / rod.bead_spacing_nm:
-                break
-            escapes += 1
-            if escapes > max_escapes:
-                raise KnotError(f"still at a saddle (curvature {lam:.3g} pN/nm) after "
-                                f"{max_escapes} escapes at Newton iteration {it}")
-            v = vec.reshape(-1, 3) * (0.5 * rod.thickness_nm / np.abs(vec).max())
-            cand = [(energy(x + s * v, prob), s) for s in (1.0, -1.0)]
-            E, s = min(cand)
-            x = x + s * v
-            mu = 1e-8 * rod.stretch_modulus_pN / rod.bead_spacing_nm
-            continue
-        accepted = False
-        for _ in range(30):
-            A = H + mu * sp.identity(H.shape[0], format="csr")
-            try:
-                step = spla.spsolve(A.tocsc(), -g)
-            except RuntimeError:
-                step = None
-            if step is None or not np.all(np.isfinite(step)) or step @ g >= 0:
-                mu *= 10.0
-                continue
-            smax = float(np.abs(step).max())
-            scale = min(1.0, 0.5 * rod.thickness_nm / smax)  # never jump across the rod
-            t = scale
-            for _ls in range(20):
-                xn = x + t * step.reshape(-1, 3)
-                En = energy(xn, prob)
-                if En <= E + 1e-4 * t * (step @ g):
-                    accepted = True
-                    break
-                t *= 0.5
-            if accepted:
-                x, E = xn, En
-                mu = max(mu / 3.0, 1e-12)
-                break
-            mu *= 10.0
-        if not accepted:
-            break
+    S, b = rod.stretch_modulus_pN, rod.bead_spacing_nm
+    settings = newton.NewtonSettings(
+        gtol=1e-6 * rod.tension_pN if gtol_pN is None else float(gtol_pN),
+        max_step=0.5 * rod.thickness_nm, escape_step=0.5 * rod.thickness_nm,
+        mu_start=1e-8 * S / b, mu_min=1e-12, saddle_tol=1e-9 * S / b,
+        max_iter=max_iter, max_escapes=max_escapes, max_damping_tries=30, max_halvings=20)
+    try:
+        res = newton.minimize(
+            x0, lambda x: energy(x, prob),
+            lambda x, gn: gradient_hessian(x, prob, gauss_newton=gn), settings,
+            lowest_mode=lambda x: _lowest_mode(x, prob), progress=progress)
+    except newton.NewtonError as exc:
+        raise KnotError(str(exc)) from exc
+    x = res["x"]
     overlap = max_overlap(x, rod)
     if overlap > rod.thickness_nm:
         raise KnotError(f"strands passed through each other during relaxation (overlap "
                         f"{overlap:.3g} nm > h = {rod.thickness_nm} nm): lower bead_spacing_nm "
                         "or raise contact stiffness")
-    return {"x": x, "iterations": it, "max_force_pN": gmax, "energy_pN_nm": E,
-            "wall_time_s": time.perf_counter() - t0, "converged": gmax < gtol,
-            "saddle_escapes": escapes,
+    return {**res, "wall_time_s": time.perf_counter() - t0,
             "terms_pN_nm": energy_terms(x, prob)}
 
 
@@ -438,14 +330,7 @@ def _lowest_mode(x, prob: _Problem):
     t = np.zeros(n3)
     t[2::3] = 1.0 / math.sqrt(n3 / 3)
     shift = 1e-6 * prob.rod.stretch_modulus_pN / prob.rod.bead_spacing_nm
-    try:
-        lam, vec = spla.eigsh(H.tocsc(), k=4, sigma=-shift, which="LM")
-    except Exception as exc:  # noqa: BLE001 - ARPACK failures are reported, not fatal
-        raise KnotError(f"could not compute the Hessian's lowest mode: {exc}") from exc
-    keep = np.abs(vec.T @ t) < 0.9
-    lam, vec = lam[keep], vec[:, keep]
-    i = int(np.argmin(lam))
-    return float(lam[i]), vec[:, i]
+    return newton.lowest_mode(H, shift=shift, k=4, exclude=(t,))
 
 
 def max_overlap(x, rod: KnotRod) -> float:
@@ -478,8 +363,8 @@ def build_system(rod: KnotRod, x0, x_contacts=None, *, contact_cutoff_nm: float 
     """
     import openmm
 
-    from .forces import bending_force, contact_force, stretch_force
-    from .units import PN_NM_IN_KJ_MOL as C
+    from ..forces import bending_force, contact_force, stretch_force
+    from ..units import PN_NM_IN_KJ_MOL as C
 
     prob = make_problem(rod, x0)
     N = len(x0)
@@ -521,7 +406,7 @@ def openmm_forces(rod: KnotRod, x, x0=None, platform: str = "Reference"):
     import openmm
     from openmm import unit
 
-    from .units import PN_NM_IN_KJ_MOL as C
+    from ..units import PN_NM_IN_KJ_MOL as C
 
     system = build_system(rod, x if x0 is None else x0, x_contacts=x)
     ctx = openmm.Context(system, openmm.VerletIntegrator(1e-3),

@@ -1,20 +1,21 @@
-"""Run a schedule on an engine: ramp, equilibrate, sample; observables and frames streamed.
+"""Run a schedule of states on an engine: ramp, equilibrate, sample; observables and frames
+streamed. The run driver (:mod:`dnabraid.run.driver`) calls this; it reads no scene.
 
-:func:`run_schedule` executes every :class:`~dnabraid.protocols.Segment` of a schedule.
+:func:`run_members` executes every :class:`~dnabraid.run.states.Segment` of a schedule
+for one replica alone in its Context or for R replicas packed into one Context
+(:mod:`dnabraid.run.packing`): one engine steps all of them, and every replica keeps its own
+start, observables, invariant checks and point directories, exactly as if it ran alone.
 A segment that follows another loads that segment's checkpoint (positions and the
 random-number state); an independent segment gets a fresh Context with its own random
 stream (:meth:`Engine.restart`, a hash of the seed and the segment's index) and starts
-from the saved initial state. Either way an interrupted run that is started again repeats
+from the saved initial state or from the start the scene built for it
+(:attr:`Member.starts`). Either way an interrupted run that is started again repeats
 exactly what the uninterrupted one did and ends with the same numbers (same platform).
 Finished segments are skipped.
 
-:func:`run_packed` does the same for R replicas packed into one Context
-(:mod:`dnabraid.packing`): one engine steps all of them, and every replica keeps its own
-start, observables, invariant checks and point directories, exactly as if it ran alone.
-
-A model whose ``extra["moves"]`` holds a :class:`dnabraid.moves.RigidMoves` gets its
-Metropolis moves after every report interval of equilibration and sampling (each packed
-replica in its own frame); their counts go to ``moves.json`` in each point directory.
+A model with ``moves`` (:class:`dnabraid.run.moves.RigidMoves`) gets its Metropolis moves
+after every report interval of equilibration and sampling (each packed replica in its own
+frame); their counts go to ``moves.json`` in each point directory.
 """
 
 from __future__ import annotations
@@ -29,34 +30,63 @@ import shutil
 
 import numpy as np
 
-from . import reporters, rundir
+from .. import rundir
+from ..observables import ObserveContext, columns_of
+from ..units import TWO_PI
+from . import reporters
 from .engine import Engine
 from .moves import apply_moves
-from .protocols import Segment
+from .states import Segment
 
 log = logging.getLogger(__name__)
 
-TWO_PI = 6.283185307179586
-
-__all__ = ["run_schedule", "run_packed", "point_dir", "Member"]
+__all__ = ["run_members", "point_dir", "Member", "RunSettings"]
 
 
 def point_dir(out: str, seg: Segment) -> str:
     return os.path.join(out, "points", seg.tag)
 
 
+@dataclasses.dataclass(frozen=True)
+class RunSettings:
+    """How the segments run, the same for every member of a pack.
+
+    Attributes
+    ----------
+    report_interval, frame_interval : int
+        Steps between observable samples and between trajectory frames.
+    minimise : bool
+        Minimise the initial state (False for exact equilibrium starts).
+    trap_parameter : str or None
+        Global parameter of the trap angle (radians); None when nothing is turned.
+    turn_rate : float or None
+        Turns per step of a ramp from 0 when a built start is missing.
+    mirror_axis : int or None
+        For the image of a mirror-coupled pair: the axis its start is mirrored along.
+    """
+
+    report_interval: int
+    frame_interval: int
+    minimise: bool = True
+    trap_parameter: str | None = None
+    turn_rate: float | None = None
+    mirror_axis: int | None = None
+
+
 @dataclasses.dataclass
 class Member:
-    """One replica of a run: its model, observables, run directory and context.
+    """One replica of a run: its model, observables, run directory and built starts.
 
-    ``ctx`` as for :func:`run_schedule`; ``sl`` and ``offset`` place the replica's particles
-    in the engine's positions (the whole array and no offset when it runs alone).
+    ``starts`` maps a segment index to the positions (nm) the scene built for it (None: it
+    could not be built; the pack then ramps there from 0). ``sl`` and ``offset`` place the
+    replica's particles in the engine's positions (the whole array and no offset when it
+    runs alone).
     """
 
     model: object
     observables: list
     out: str
-    ctx: dict
+    starts: dict = dataclasses.field(default_factory=dict)
     sl: slice = dataclasses.field(default_factory=lambda: slice(None))
     offset: np.ndarray | float = 0.0
     label: str = ""
@@ -74,70 +104,62 @@ def _observe(observables, pos, ctx, every_frame: bool) -> tuple[dict, str | None
     return values, None
 
 
-def run_schedule(model, engine: Engine, schedule, observables, out: str, *, ctx: dict,
-                 progress=None) -> list[str]:
-    """Run (or skip, when finished) every segment; return the point directories in order.
+def run_members(engine: Engine, schedule, members: list, settings: RunSettings, out: str, *,
+                pack=None, progress=None) -> list[list[str]]:
+    """Run (or skip, when finished) every segment for ``members``; return each member's
+    point directories in order.
 
     Parameters
     ----------
-    model : dnabraid.chains.Model
     engine : Engine
-    schedule : dnabraid.protocols.TurnSchedule
-    observables : list of dnabraid.observables.Observable
+        Runs the member's model alone, or ``pack.model`` for packed members.
+    schedule : dnabraid.run.states.Schedule
+    members : list of Member
+    settings : RunSettings
     out : str
-        Run directory.
-    ctx : dict
-        Context passed to observables (``trap_stiffness``, ``turn_rate``; the runner sets
-        ``trap_turns``). ``ctx["trap_parameter"]`` names the trap angle's global parameter
-        (None: the scene does not turn the bead). ``ctx["start_positions"]``, a function of
-        the turn value returning positions (nm), builds the start of segments that begin at
-        their own turn value (``start_from`` None and ``start_turns`` != 0).
+        Directory of this Context's checkpoints (``out/checkpoints``): the replica's own
+        run directory when it runs alone, the pack's directory otherwise. Each member writes
+        its points under its own ``member.out``.
+    pack : dnabraid.run.packing.Pack, optional
+        The members' pack (one copy per member, in order).
     progress : callable(int), optional
-        Called with the number of steps just taken.
+        Called with the number of replica-steps just taken.
     """
-    member = Member(model, observables, out, ctx)
-    return _run_members(engine, schedule, [member], os.path.join(out, "checkpoints"),
-                        lambda seg: os.path.join(point_dir(out, seg), "state.chk"),
-                        progress=progress)[0]
-
-
-def run_packed(pack, engine: Engine, schedule, members: list, out: str, *,
-               progress=None) -> list[list[str]]:
-    """Run every segment for the packed replicas ``members`` (one :class:`Member` per copy
-    of ``pack``, a :class:`dnabraid.packing.Pack`); the engine runs ``pack.model``.
-
-    Checkpoints of the packed Context go to ``out/checkpoints``; each replica writes its
-    points under its own ``member.out``. Returns each replica's point directories.
-    """
+    ckdir = os.path.join(out, "checkpoints")
+    if pack is None:
+        if len(members) != 1:
+            raise ValueError("several members need their pack")
+        return _run_members(engine, schedule, members, settings, ckdir,
+                            lambda seg: os.path.join(point_dir(members[0].out, seg),
+                                                     "state.chk"), progress=progress)
     for r, m in enumerate(members):
         m.sl, m.offset = pack.slice(r), pack.offsets[r]
-    return _run_members(engine, schedule, members, os.path.join(out, "checkpoints"),
-                        lambda seg: os.path.join(out, "checkpoints", f"{seg.tag}.chk"),
+    return _run_members(engine, schedule, members, settings, ckdir,
+                        lambda seg: os.path.join(ckdir, f"{seg.tag}.chk"),
                         progress=progress, check=pack.check_apart)
 
 
-def _run_members(engine, schedule, members, ckdir, chk_path, *, progress=None,
+def _run_members(engine, schedule, members, settings, ckdir, chk_path, *, progress=None,
                  check=None) -> list[list[str]]:
     progress = progress or (lambda n: None)
     m0 = members[0]
-    s = m0.model.scene
-    ri = s.report_interval
-    every = max(1, s.frame_interval // ri)
+    ri = settings.report_interval
+    every = max(1, settings.frame_interval // ri)
     os.makedirs(ckdir, exist_ok=True)
     init = os.path.join(ckdir, "initial.xml")
     if not os.path.exists(init):
-        if m0.ctx.get("minimise", True):
+        if settings.minimise:
             engine.minimise()
         engine.save_state(init)
     obs0 = m0.observables
-    sample_cols = {k: v for ob in obs0 if ob.every == "sample" for k, v in ob.columns.items()}
-    frame_cols = {k: v for ob in obs0 if ob.every == "frame" for k, v in ob.columns.items()}
-    trap = m0.ctx.get("trap_parameter")
-    axis = getattr(s, "mirror_axis", None)
+    sample_cols = columns_of(obs0, "sample")
+    frame_cols = columns_of(obs0, "frame")
+    trap = settings.trap_parameter
+    axis = settings.mirror_axis
     if axis is not None and any(np.broadcast_to(np.asarray(m.offset, float), (3,))[axis]
                                 != 0.0 for m in members):
         raise ValueError("mirror-coupled replicas pack only along the other axes "
-                         "(dnabraid.packing.pack_models(line=True))")
+                         "(dnabraid.run.packing.pack_models(line=True))")
     dirs: list[list[str]] = [[] for _ in members]
     for seg in schedule:
         pdirs = [point_dir(m.out, seg) for m in members]
@@ -152,7 +174,7 @@ def _run_members(engine, schedule, members, ckdir, chk_path, *, progress=None,
             # start built at its turn value (made, minimised and saved once)
             engine.restart(seg.index)
             start = init
-            if seg.start_turns != 0.0 or getattr(s, "builds_zero_start", False):
+            if seg.built_start:
                 start = os.path.join(ckdir, f"initial_{seg.tag}.xml")
                 if not os.path.exists(start):
                     _build_start(engine, members, seg, init, trap, axis)
@@ -161,7 +183,7 @@ def _run_members(engine, schedule, members, ckdir, chk_path, *, progress=None,
             if seg.start_turns != 0.0 and trap is not None and abs(
                     engine.context.getParameter(trap) - TWO_PI * seg.start_turns) > 1e-9:
                 # the start could not be built at the turn value: ramp there from 0
-                rate = m0.ctx["turn_rate"]
+                rate = settings.turn_rate
                 ramp = int(math.ceil(abs(seg.turns) / rate / ri)) * ri
                 seg = dataclasses.replace(seg, start_turns=0.0, ramp_steps=ramp)
         else:
@@ -169,11 +191,11 @@ def _run_members(engine, schedule, members, ckdir, chk_path, *, progress=None,
         for p in pdirs:
             if os.path.isdir(p):
                 shutil.rmtree(p)  # an interrupted point: run it again from its start
-        ctxs = [dict(m.ctx, trap_turns=seg.start_turns) for m in members]
+        ctxs = [ObserveContext(trap_turns=seg.start_turns) for _ in members]
         split = _splitter(members)
-        # Metropolis rigid-body moves (dnabraid.moves), where a scene asks for them: after
+        # Metropolis rigid-body moves (dnabraid.run.moves), where a scene asks for them: after
         # every report interval of equilibration and sampling, on their own random stream
-        movers = [m.model.extra.get("moves") for m in members]
+        movers = [m.model.moves for m in members]
         has_moves = any(mv is not None for mv in movers)
         for mv in movers:
             if mv is not None:
@@ -206,7 +228,7 @@ def _run_members(engine, schedule, members, ckdir, chk_path, *, progress=None,
 
         with contextlib.ExitStack() as stack:
             ws = [stack.enter_context(reporters.PointWriter(
-                p, m.model.topology, engine.dt_ns * 1e3, s.frame_interval, sample_cols,
+                p, m.model.topology, engine.dt_ns * 1e3, settings.frame_interval, sample_cols,
                 frame_cols, seg.turns)) for m, p in zip(members, pdirs)]
             # 1. ramp the trap angle
             nramp = seg.ramp_steps // ri
@@ -215,13 +237,13 @@ def _run_members(engine, schedule, members, ckdir, chk_path, *, progress=None,
                 engine.set_parameter(trap, TWO_PI * tt)
                 pos = engine.advance(ri, fail_dir)
                 for c in ctxs:
-                    c["trap_turns"] = tt
+                    c.trap_turns = tt
                 observe(pos, False)
                 progress(ri * len(members))
             if trap is not None:
                 engine.set_parameter(trap, TWO_PI * seg.turns)
             for c in ctxs:
-                c["trap_turns"] = seg.turns
+                c.trap_turns = seg.turns
             # 2. equilibrate
             left = seg.equilibration_steps
             while left > 0:
@@ -256,26 +278,23 @@ def _splitter(members):
 def _build_start(engine, members, seg, init, trap, axis) -> None:
     """Set the engine to the members' built starts at ``seg.start_turns``, minimised.
 
-    When a member's scene cannot build it, every member keeps the initial state (the caller
-    then ramps there from 0: one trap angle drives them all).
+    When a member's start could not be built (``member.starts`` holds None for this
+    segment), every member keeps the initial state (the caller then ramps there from 0:
+    one trap angle drives them all).
     """
-    built = []
-    for m in members:
-        try:
-            built.append(m.ctx["start_positions"](seg.start_turns))
-        except ValueError as exc:  # the scene cannot build it: ramp from 0
-            log.info("turns=%g: %s; ramping from 0 instead", seg.turns, exc)
-            built = None
-            break
+    built = [m.starts.get(seg.index) for m in members]
     engine.load_state(init)
-    if built is None:
+    if any(b is None for b in built):
+        log.info("turns=%g: a member's start could not be built; ramping from 0 instead",
+                 seg.turns)
         return
     if axis is None:
         pos = engine.positions()
         for m, b in zip(members, built):
             pos[m.sl] = np.asarray(b, float) + m.offset
         engine.set_positions(pos)
-        engine.set_parameter(trap, TWO_PI * seg.start_turns)
+        if trap is not None:
+            engine.set_parameter(trap, TWO_PI * seg.start_turns)
         engine.minimise()
     else:
         # the image of a mirror-coupled pair: minimise in the original's frame (the

@@ -15,7 +15,7 @@ one of
   rows say whether it converged (the zero-temperature knot): converged;
 * ``refused``: the scene was rejected at validation with a
   :class:`~dnabraid.scenes.SceneError` whose message names the key and what is allowed;
-* ``stopped``: the engine raised :class:`~dnabraid.engine.SimulationBlowUp`, naming the step
+* ``stopped``: the engine raised :class:`~dnabraid.run.engine.SimulationBlowUp`, naming the step
   and the force term (or the invariant) that failed.
 
 Anything else (an unexpected exception, an invariant broken silently) is a bug and is
@@ -37,9 +37,9 @@ import time
 
 import numpy as np
 
-from .engine import SimulationBlowUp
-from .scenes import SceneError, make_scene
-from .scenes.braid import LONG_BRAID
+from ..run.engine import SimulationBlowUp
+from ..scenes import SceneError, make_scene
+from ..scenes.braid import LONG_BRAID
 
 log = logging.getLogger(__name__)
 
@@ -155,12 +155,12 @@ def case_settings(case: Case, short: dict | None = None) -> dict:
 def _end_states(model, out: str, scene) -> tuple[float, float]:
     """Largest bond length / b and potential energy per particle (kT) over the states
     saved at the end of every turn value (every replica) of the run in ``out``."""
-    from .engine import Engine
+    from ..run.engine import Engine
 
     paths = sorted(glob.glob(os.path.join(out, "**", "state.chk"), recursive=True))
     if not paths:
         raise RuntimeError(f"no end-of-point state (state.chk) under {out}")
-    engine = Engine(model, platform="CPU", seed=scene.seed, threads=1)
+    engine = Engine.for_model(model, platform="CPU", seed=scene.seed, threads=1)
     kT = model.params["kT_pN_nm"]
     n = model.system.getNumParticles()
     b = scene.bead_spacing_nm

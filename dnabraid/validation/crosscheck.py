@@ -21,9 +21,9 @@ import time
 
 import numpy as np
 
-from .geometry.curves import catenation_number
-from .scenes import make_scene
-from .scenes.braid import LONG_BRAID
+from ..geometry.curves import catenation_number
+from ..scenes import make_scene
+from ..scenes.braid import LONG_BRAID
 
 TWO_PI = 2.0 * math.pi
 
@@ -63,13 +63,13 @@ def zero_temperature_braid(turns: float, overrides: dict | None = None, *, incre
     tolerance_pN : float
         Force tolerance of OpenMM's L-BFGS minimiser (a final pass uses 1/10 of it).
     """
-    from .engine import Engine
+    from ..run.engine import Engine
 
     t0 = time.perf_counter()
     over = {**CROSSCHECK_BRAID, "surface": False, **(overrides or {}), "turns": [float(turns)]}
     s = make_scene("braid", over)
     m = s.build()
-    e = Engine(m, seed=s.seed, threads=1)
+    e = Engine.for_model(m, seed=s.seed, threads=1)
     e.minimise(tolerance_pN=tolerance_pN, max_iterations=20000)
     for k in range(1, increments + 1):
         e.set_parameter("trap_angle", TWO_PI * turns * k / increments)
@@ -97,7 +97,7 @@ def compare_tweezer(turns: float, alpha_pN: float, overrides: dict | None = None
     handedness asymmetries ``delta_z_nm = z(+n) - z(-n)`` and ``torque_sum_pN_nm =
     Gamma(+n) + Gamma(-n)`` of both (zero for both when alpha = 0).
     """
-    from .continuum.tweezer import solve_tweezer
+    from ..continuum.tweezer import solve_tweezer
 
     over = {**CROSSCHECK_BRAID, **(overrides or {})}
     s = make_scene("braid", {**over, "turns": [abs(turns)]})

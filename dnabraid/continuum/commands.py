@@ -1,7 +1,7 @@
-"""``dnabraid continuum ply|knot|overhand|tweezer|closed``: the CLI of the continuum module.
+"""``dnabraid continuum ply|knot|overhand|tweezer|closed``: the continuum sub-commands.
 
-Each problem lives in its own module (``ply``, ``knot``, ``overhand``, ``tweezer``,
-``closed``) that provides ``cli_add_arguments(parser)`` and ``cli_run(args) -> dict``; this
+Each problem lives in its own module (``ply``, ``knot_braid``, ``overhand``, ``tweezer``,
+``closed_ply``) that provides ``cli_add_arguments(parser)`` and ``cli_run(args) -> dict``; this
 module only dispatches. Modules are imported lazily so ``dnabraid --help`` stays fast.
 """
 
@@ -14,12 +14,12 @@ import importlib
 PROBLEMS = {
     "ply": ("ply", "two-ply in hard contact: uniform plies and the ply with ends "
                    "(seed 000, slides 15-19)"),
-    "knot": ("knot", "braid of an open elastic knot: the difference problem, w_c, sigma "
+    "knot": ("knot_braid", "braid of an open elastic knot: the difference problem, w_c, sigma "
                      "(seed 002, Eqs. 5-9)"),
     "overhand": ("overhand", "long overhand knots: helical braid, loop elastica g, master "
                              "curve (seed 001)"),
     "tweezer": ("tweezer", "two molecules braided in magnetic tweezers: z(n), torque(n)"),
-    "closed": ("closed", "closed two-ply (torus links and knots): uniform, axis-curvature "
+    "closed": ("closed_ply", "closed two-ply (torus links and knots): uniform, axis-curvature "
                          "correction, relaxed equilibrium (seed 000, slides 19-23)"),
 }
 

@@ -1,8 +1,8 @@
-"""Twist, writhe and linking of a framed bead chain, and the plectoneme finder (pure numpy).
+"""A framed bead chain as a ribbon: twist, writhe, linking, and plectonemes (pure numpy).
 
 Frames. Bond i (beads r_i -> r_{i+1}) has unit tangent t_i and material vector u_i, the
 part of ``s_i - r_i`` perpendicular to t_i (s_i its side particle,
-:mod:`dnabraid.forces.twist`).
+:mod:`dnabraid.forces.twist_frames`).
 
 Twist. The twist angle of a joint is the rotation about t_{i+1} that takes the parallel
 transport of u_i (minimal rotation t_i -> t_{i+1}, Rodrigues' formula) onto u_{i+1};
@@ -35,7 +35,7 @@ import math
 
 import numpy as np
 
-from .curves import _as_points, _gauss_sum, writhe
+from .curves import as_points, gauss_sum, writhe
 
 __all__ = [
     "Plectoneme",
@@ -101,7 +101,7 @@ def bond_frames(chain, sides):
     -------
     t, u : ndarray, shape (n - 1, 3)
     """
-    p = _as_points(chain, "chain")
+    p = as_points(chain, "chain")
     s = np.asarray(sides, float)
     if s.shape != (p.shape[0] - 1, 3):
         raise ValueError(f"sides must have shape ({p.shape[0] - 1}, 3); got {s.shape}")
@@ -157,13 +157,13 @@ def writhe_open(chain, ray_length: float | None = None) -> float:
     float
         Wr (dimensionless); 0 for a planar chain whose end rays lie in its plane.
     """
-    p = _as_points(chain, "chain")
+    p = as_points(chain, "chain")
     if ray_length is None:
         ray_length = 1e4 * max(float(np.ptp(p, axis=0).max()), 1e-12)
     up = np.array([0.0, 0.0, float(ray_length)])
     q = np.vstack([p[0] - up, p, p[-1] + up])
     a, b = q[:-1], q[1:]
-    return 2.0 * _gauss_sum(a, b, a, b, mask_fn=lambda i, j: j > i + 1)
+    return 2.0 * gauss_sum(a, b, a, b, mask_fn=lambda i, j: j > i + 1)
 
 
 def linking_number(chain, sides, bead_vector, **kw) -> float:
@@ -186,7 +186,7 @@ def ring_bond_frames(ring, sides):
     -------
     t, u : ndarray, shape (n, 3)
     """
-    p = _as_points(ring, "ring", min_points=3)
+    p = as_points(ring, "ring", min_points=3)
     s = np.asarray(sides, float)
     if s.shape != p.shape:
         raise ValueError(f"a ring of {p.shape[0]} beads has {p.shape[0]} bonds: sides must "
@@ -236,7 +236,7 @@ def ring_side_positions(ring_pos, arm_nm: float, delta_lk: int = 0, first=None) 
     if int(delta_lk) != delta_lk:
         raise ValueError(f"delta_lk must be an integer (a closed ribbon's linking number); "
                          f"got {delta_lk!r}")
-    p = _as_points(ring_pos, "ring_pos", min_points=4)
+    p = as_points(ring_pos, "ring_pos", min_points=4)
     n = p.shape[0]
     t = np.roll(p, -1, axis=0) - p
     t /= np.linalg.norm(t, axis=1, keepdims=True)
@@ -318,7 +318,7 @@ def find_plectonemes(chain, *, contact_nm: float = 12.0, min_separation_nm: floa
     -------
     list of Plectoneme, sorted by tip position.
     """
-    p = _as_points(chain, "chain")
+    p = as_points(chain, "chain")
     s = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(p, axis=0), axis=1))])
     d = np.linalg.norm(p[:, None, :] - p[None, :, :], axis=-1)
     i, j = np.nonzero(np.triu((d < contact_nm) & (s[None, :] - s[:, None] >= min_separation_nm)))

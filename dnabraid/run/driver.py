@@ -1,0 +1,270 @@
+"""The thermal run driver: replicas, workers, packing, the schedule of states, moves,
+verdicts and the run's summary, for any scene that keeps :class:`ThermalContract`.
+
+:func:`run` is the whole of a thermal run (OpenMM's ``Simulation`` and MDAnalysis'
+``AnalysisBase.run`` are the models: the scene prepares, the driver steps and concludes):
+
+1. build the scene's model once (topology, time step, the notes) and prepare the run
+   directory (``scene.toml``; a directory holding the same scene is resumed);
+2. group replicas into packs (:func:`dnabraid.run.packing.group_replicas`: copies of one
+   System in one Context; one Context per replica when a force cannot be packed) and run
+   the packs in worker processes, one pinned core each (:mod:`dnabraid.run.workers`);
+   every replica builds its own model from its own seed (:meth:`ThermalContract.replica`),
+   its own starts, and writes ``replicas/rNN/points/...``;
+3. summarise every point from the replicas' files (:meth:`ThermalContract.point_summary`:
+   means, errors across replicas and the convergence verdict), add replicas while a
+   precision target is unmet and the budget allows, and write ``summary.json``, the
+   combined ``observables.csv``, ``frames.csv``, ``trajectory.dcd``, ``topology.pdb`` and
+   the scene's figure.
+
+The driver reads the scene only through the contract and the model only through its typed
+fields; the engine (:class:`dnabraid.run.engine.Engine`) gets a System and integrator
+settings.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import os
+import time
+
+from .. import rundir
+from ..observables import columns_of
+from . import reporters
+from .contract import StartError, ThermalContract
+from .engine import Engine, IntegratorSettings, check_platform
+from .packing import group_replicas, pack_models, packable
+from .segments import Member, RunSettings, run_members
+from .workers import run_jobs, usable_cores
+
+__all__ = ["run", "run_pack", "replica_groups", "packing_notes", "moves_summary",
+           "MAX_REPLICAS"]
+
+#: Most replicas per point; replica r of seed s runs seed s x MAX_REPLICAS + r.
+MAX_REPLICAS = 64
+
+
+def replica_groups(scene: ThermalContract, replicas, workers: int, platform: str,
+                   model) -> list[tuple]:
+    """Replicas grouped into packs (one OpenMM Context each): ``scene.pack`` per group, or
+    with ``pack = 0`` as many as spread the replicas evenly over the workers; one per group
+    when the model cannot be packed (a force that cannot be copied, unless the model says
+    how to rebuild it over all copies, as the chiral term does)."""
+    can = packable(model.system, model.rebuild_forces)[0]
+    return group_replicas(replicas, scene.pack, workers, platform, can)
+
+
+def packing_notes(groups) -> list[str]:
+    """The summary note saying how replicas were packed (none when each ran alone)."""
+    if not any(len(g) > 1 for g in groups):
+        return []
+    return [f"replicas packed into {len(groups)} OpenMM Context(s) of "
+            f"{', '.join(str(len(g)) for g in groups)} non-interacting copies (key `pack`; "
+            "each replica keeps its own start, checks and files)"]
+
+
+def moves_summary(dirs) -> dict | None:
+    """Metropolis move counts summed over the replicas' ``moves.json`` of one point, with
+    the acceptance of each kind; None when no replica made moves."""
+    tot: dict = {}
+    for d in dirs:
+        path = os.path.join(d, "moves.json")
+        if not os.path.exists(path):
+            continue
+        with open(path) as fh:
+            m = json.load(fh)
+        for k, v in m.items():
+            if isinstance(v, dict):
+                t = tot.setdefault(k, {"attempted": 0, "refused_by_constraint": 0,
+                                       "accepted": 0})
+                for c in t:
+                    t[c] += int(v[c])
+            else:
+                tot[k] = v
+    if not tot:
+        return None
+    for v in tot.values():
+        if isinstance(v, dict):
+            v["acceptance"] = v["accepted"] / v["attempted"] if v["attempted"] else None
+    return tot
+
+
+def _settings(scene: ThermalContract, schedule, model) -> RunSettings:
+    return RunSettings(report_interval=scene.report_interval,
+                       frame_interval=scene.frame_interval,
+                       minimise=not model.exact_start,
+                       trap_parameter=schedule.trap_parameter, turn_rate=schedule.turn_rate,
+                       mirror_axis=scene.mirror_axis)
+
+
+def _starts(scene: ThermalContract, model, schedule) -> tuple[dict, list[str]]:
+    """The starts the scene builds for this replica (segment index -> positions or None),
+    and a note for each that could not be built."""
+    out, failed = {}, []
+    for seg in schedule:
+        if not seg.built_start:
+            continue
+        try:
+            out[seg.index] = scene.start(model, seg)
+        except (StartError, ValueError) as exc:
+            out[seg.index] = None
+            failed.append(f"{seg.tag}: {exc}")
+    return out, failed
+
+
+def _engine(scene: ThermalContract, model, platform, threads) -> Engine:
+    settings = IntegratorSettings(model.dna.temperature_K, model.timestep.time_step_ns,
+                                  scene.integrator, scene.noise_sign)
+    return Engine(model.system, model.positions, settings, bonds=model.bonds,
+                  bond_length_nm=model.dna.bead_spacing_nm, terms=model.forces,
+                  platform=platform, seed=scene.seed, threads=threads)
+
+
+def run_pack(job, progress=None) -> list[dict]:
+    """Run the replicas of one group: alone in its own Context (one replica), or packed
+    into one Context; each writes ``out/replicas/rNN``. ``job`` is (scene, replica indices,
+    run directory, platform, threads); returns one record per replica."""
+    base, group, out, platform, threads = job
+    members, scenes, failed = [], [], []
+    schedule = base.states()
+    for r in group:
+        scene = base.replica(r)
+        scenes.append(scene)
+        model = scene.build()
+        starts, bad = _starts(scene, model, schedule)
+        failed.append(bad)
+        rdir = os.path.join(out, "replicas", f"r{r:02d}")
+        members.append(Member(model, scene.observables(model), rdir, starts,
+                              label=f"replica {r}"))
+    first = scenes[0]
+    settings = _settings(first, schedule, members[0].model)
+    if len(group) == 1:
+        m = members[0]
+        engine = _engine(first, m.model, platform, threads)
+        resumed = os.path.isdir(os.path.join(m.out, "checkpoints"))
+        os.makedirs(m.out, exist_ok=True)
+        dirs = run_members(engine, schedule, [m], settings, m.out, progress=progress)
+    else:
+        pack = pack_models([m.model for m in members], line=first.pack_along_line)
+        engine = _engine(first, pack.model, platform, threads)
+        pdir = os.path.join(out, "replicas", f"pack_r{group[0]:02d}-r{group[-1]:02d}")
+        resumed = os.path.isdir(os.path.join(pdir, "checkpoints"))
+        for m in members:
+            os.makedirs(m.out, exist_ok=True)
+        dirs = run_members(engine, schedule, members, settings, pdir, pack=pack,
+                           progress=progress)
+    return [{"replica": r, "dirs": ds, "integrator_seed": engine.seed, "resumed": resumed,
+             "pack": tuple(group), "starts_not_built": bad}
+            for r, ds, bad in zip(group, dirs, failed)]
+
+
+def _pack_job(job, report):
+    return run_pack(job, report)
+
+
+def run(scene: ThermalContract, out: str, *, platform: str = "CPU", threads: int | None = None,
+        progress_factory=None) -> dict:
+    """Run a thermal scene into the run directory ``out``; return the summary dict.
+
+    Parameters
+    ----------
+    scene : ThermalContract
+    out : str
+    platform : str
+        OpenMM platform ('CPU', 'Reference', 'CUDA', 'OpenCL').
+    threads : int, optional
+        CPU threads of a Context (one per worker when several workers run).
+    progress_factory : callable(total_steps) -> bar, optional
+        A progress bar with ``update(n)`` and ``close()`` (the CLI's).
+    """
+    t0 = time.perf_counter()
+    check_platform(platform)
+    model = scene.build()
+    rundir.prepare_out_dir(scene, out)
+    sched = scene.states()
+    obs = scene.observables(model)
+    workers = scene.workers or len(usable_cores())
+    results: list = []
+    points: list = []
+    R = scene.replicas
+    stopped_by = "replicas"
+    while True:
+        # run replicas len(results) .. R-1 (all of them the first time)
+        groups = replica_groups(scene, range(len(results), R), workers, platform, model)
+        nw = max(1, min(workers, len(groups))) if platform == "CPU" else 1
+        jobs = [(scene, g, out, platform, threads if nw == 1 else 1) for g in groups]
+        bar = progress_factory(sched.total_steps * (R - len(results))) \
+            if progress_factory else None
+        try:
+            done = run_jobs(_pack_job, jobs, nw, progress=bar.update if bar else None)
+            results += [x for res in done for x in res]
+        finally:
+            if bar:
+                bar.close()
+        columns = columns_of(obs)
+        points = []
+        for k, seg in enumerate(sched):
+            dirs = [r["dirs"][k] for r in results]
+            pt = scene.point_summary(seg, [reporters.read_point(d) for d in dirs], columns)
+            mv = moves_summary(dirs)
+            if mv is not None:
+                pt["rigid_moves"] = mv
+            points.append(pt)
+        need = scene.replicas_needed(points, R)
+        if need <= R:
+            stopped_by = "target" if scene.has_targets() else "replicas"
+            break
+        if R >= scene.max_replicas:
+            stopped_by = "budget"
+            break
+        R = min(need, scene.max_replicas)
+    wall = time.perf_counter() - t0
+    resumed = any(r["resumed"] for r in results)
+    total = sched.total_steps * R
+    p = model.params
+    dt_ns = model.timestep.time_step_ns
+    rundir.write_topology(os.path.join(out, "topology.pdb"), model.topology, model.positions)
+    reporters.combine(out, [d for r in results for d in r["dirs"]], model.topology,
+                      dt_ns * 1e3, scene.frame_interval, columns_of(obs, "sample"),
+                      columns_of(obs, "frame"))
+    for pt in points:
+        scene.finish_point(pt, stopped_by)
+    notes = scene.notes(model)
+    if resumed:
+        notes.append("resumed from checkpoints; wall_time_s counts this invocation only")
+    bad = [pt.get("label", "") for pt in points if not pt["converged"]]
+    if bad:
+        notes.append(f"NOT CONVERGED at {', '.join(bad)}: the replicas disagree more than "
+                     "their sampling allows or sampled too few independent configurations "
+                     "(see convergence_reason per point); raise `steps` or `replicas`")
+    not_built = [f"replica {r['replica']}: {m}" for r in results
+                 for m in r.get("starts_not_built", [])]
+    if not_built:
+        notes.append("starts that could not be built (those points ramped from the shared "
+                     "initial state): " + "; ".join(not_built))
+    n_part = model.system.getNumParticles()
+    notes += packing_notes(sorted({r["pack"] for r in results}))
+    summary = rundir.Summary(
+        scene=scene.to_dict(), wall_time_s=wall, platform=platform,
+        time_step_ps=dt_ns * 1e3, time_step_reason=model.timestep.reason,
+        relaxation_rates_per_ns=model.timestep.rates_per_ns, total_steps=total,
+        steps_per_second=total / wall if not resumed else None,
+        ns_per_bead_per_step=(wall / total / n_part * 1e9 * workers) if not resumed
+        else None,
+        n_particles=n_part, forces=sorted(model.forces),
+        effective_diameter_nm=p["diameter_nm"], bending_kappa_kT=p["kappa_kT"],
+        units=_units(columns_of(obs)), notes=notes, versions=rundir.versions(),
+        points=points, seed=scene.seed, integrator_seed=results[0]["integrator_seed"],
+        columns={k: dataclasses.asdict(c) for k, c in columns_of(obs).items()})
+    rundir.write_summary(os.path.join(out, "summary.json"), summary)
+    d = summary.to_dict()
+    scene.plot(d, out)
+    return d
+
+
+def _units(columns: dict) -> dict:
+    u = {k: c.describe() for k, c in columns.items()}
+    u["sem"] = ("standard error of the mean across independent replicas (Student-t "
+                "intervals: ci_halfwidth)")
+    return u
