@@ -18,6 +18,7 @@ particles add (:meth:`ChainKit.bound`); the time step is ``safety`` x 2 / (large
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
 from collections.abc import Callable
 
@@ -374,7 +375,7 @@ class ChainKit:
                        k_fraction: float = RING_FRAME_K_FRACTION) -> np.ndarray:
         """Material frames and twist around a closed chain, closed with Lk = ``delta_lk``.
 
-        One side particle per bond (:mod:`dnabraid.forces.twist`; no excluded volume), at
+        One side particle per bond (:mod:`dnabraid.forces.twist_frames`; no excluded volume), at
         ``arm_fraction`` x b from its bead, friction ``friction_fraction`` x the bead's,
         held by frame springs of ``k_fraction`` x the bond stiffness. Stiffer springs than
         the plectoneme scene's (0.05): with those, a side particle of a 144-nm ring at
@@ -383,7 +384,7 @@ class ChainKit:
         axial and radial wobble is ~0.3 nm. The heavier side particle keeps the frame rates
         below the beads' so the time step does not shrink. The frames start parallel-transported around the ring and turned evenly
         so that the ribbon's linking number Tw + Wr is ``delta_lk``
-        (:func:`~dnabraid.geometry.twist.ring_side_positions`); the n twist joints include
+        (:func:`~dnabraid.geometry.ribbon.ring_side_positions`); the n twist joints include
         the seam, each with g = C kT / b, so that a free stretch of ring has
         <omega^2> = b / C per joint. Lk is conserved by the dynamics (a ring passing through
         itself, or a joint angle through pi, would change it: the scenes check it).
@@ -522,6 +523,7 @@ def _wca_kT(r: float, sigma: float) -> float:
     return 4.0 * (sr6 * sr6 - sr6) + 1.0
 
 
+@functools.lru_cache(maxsize=256)
 def passage_barrier_kT(bead_spacing_nm: float, diameter_nm: float,
                        bond_k_kT_per_nm2: float | None = None) -> float:
     """Excluded-volume barrier (kT) against two strands passing through each other.
@@ -550,9 +552,11 @@ def passage_barrier_kT(bead_spacing_nm: float, diameter_nm: float,
     return float(min(min(e), rigid))
 
 
+@functools.lru_cache(maxsize=256)
 def max_bead_spacing_nm(diameter_nm: float, stretch_modulus_kT_per_nm: float | None = None,
                         ) -> float:
-    """Largest bead spacing whose passage barrier is at least MIN_PASSAGE_BARRIER_KT.
+    """Largest bead spacing whose passage barrier is at least MIN_PASSAGE_BARRIER_KT
+    (a bisection of ~60 barrier evaluations, ~0.7 s: memoised, being a pure function).
 
     ``stretch_modulus_kT_per_nm`` = S / kT (bonds of stiffness S / b); None = rigid bonds.
     """

@@ -60,7 +60,9 @@ def test_verdict_rule_flags_replicas_that_did_not_move():
     stuck = [float(r) + 0.01 * rng.normal(size=400) for r in range(4)]
     w = walled.summarise(stuck)
     assert not w["converged"] and "R-hat" in w["reason"], w["reason"]
-    assert w["rhat"] > 10.0  # measured ~ inf-like: between-replica spread 100x the within
+    # fully separated replicas: the rank-normalised R-hat depends only on the ranks (2.84
+    # here), far above the relaxed 1.05
+    assert w["rhat"] > 2.0
     e = exact.summarise(stuck)
     assert e["converged"], e["reason"]
     means = [x.mean() for x in stuck]

@@ -17,7 +17,7 @@ from openmm import unit as u
 
 from dnabraid import units
 from dnabraid.geometry.curves import gauss_linking_number, writhe
-from dnabraid.geometry.twist import ring_twist
+from dnabraid.geometry.ribbon import ring_twist
 from dnabraid.scenes import SceneError, make_scene
 
 #: Statistical tolerance of a thermal average against theory, in standard errors.

@@ -30,15 +30,19 @@ ALPHA = 5.0
 def test_chiral_braid_is_the_mirror_image_at_opposite_chirality():
     """The model is mirror symmetric with alpha -> -alpha (chiral_force is odd in alpha, the
     rest even; the straight start and the quasi-static path are mirror images): the braid at
-    (+n, alpha) and at (-n, -alpha) have the same extension and opposite torque and
-    catenation, to the minimiser's tolerance (as at alpha = 0 above)."""
+    (+n, alpha) and at (-n, -alpha) have the same extension and contact and opposite torque
+    and catenation. Tolerances: the minimiser stops at slightly different points on the two
+    paths (measured: 1e-11 with 10 increments, 0.5 % of the torque and 0.01 nm with 40);
+    a broken symmetry gives the other hand's braid, (-n, +alpha): torque -12.5 instead of
+    +9.7 pN nm, extension 0.7 nm and contact 1.9 nm off."""
     p = zero_temperature_braid(1.0, {**SMALL, "alpha": ALPHA}, increments=10)
     m = zero_temperature_braid(-1.0, {**SMALL, "alpha": -ALPHA}, increments=10)
     assert p.alpha_pN == -m.alpha_pN == ALPHA
-    assert p.catenation == pytest.approx(-m.catenation, abs=1e-6)
-    assert p.extension_nm == pytest.approx(m.extension_nm, abs=1e-6)
-    assert p.torque_pN_nm == pytest.approx(-m.torque_pN_nm, abs=1e-6)
-    assert p.contact_nm == pytest.approx(m.contact_nm, abs=1e-6)
+    assert p.torque_pN_nm < 0  # the chiral drive (~ -Delta alpha / 2) exceeds +7.6 at alpha = 0
+    assert p.catenation == pytest.approx(-m.catenation, abs=1e-3)
+    assert p.torque_pN_nm == pytest.approx(-m.torque_pN_nm, rel=0.02)
+    assert p.extension_nm == pytest.approx(m.extension_nm, abs=0.1)
+    assert p.contact_nm == pytest.approx(m.contact_nm, abs=0.1)
 
 
 def test_chiral_torque_sum_has_the_continuum_sign_and_size():

@@ -11,6 +11,7 @@ import pytest
 from openmm import unit as u
 
 from dnabraid.continuum.wlc import discrete_wlc_exact
+from dnabraid.run.driver import replica_groups
 from dnabraid.run.packing import PackError, grid_offsets, pack_models, packable, replicate_system
 from dnabraid.scenes import make_scene
 
@@ -108,16 +109,16 @@ def test_chiral_and_mirror_scenes_pack():
     with pytest.raises(PackError, match="cannot pack"):
         replicate_system(m.system, 2)
     assert packable(m.system, m.rebuild_forces)[0]
-    assert s.pack_groups(range(4), 1, "CPU", m) == [(0, 1, 2, 3)]
+    assert replica_groups(s, range(4), 1, "CPU", m) == [(0, 1, 2, 3)]
     s = make_scene("braid", dict(BRAID, mirror="original"))
-    assert s.pack_groups(range(4), 1, "CPU", s.build()) == [(0, 1, 2, 3)]
+    assert replica_groups(s, range(4), 1, "CPU", s.build()) == [(0, 1, 2, 3)]
     members = _members("braid", dict(BRAID, mirror="image"), 3, 1.0)
     assert np.all(pack_models(members, line=True).offsets[:, 1:] == 0.0)
     s = make_scene("braid", BRAID)
     m = s.build()
-    assert s.pack_groups(range(4), 2, "CPU", m) == [(0, 1), (2, 3)]
-    assert s.pack_groups(range(5), 2, "CPU", m) == [(0, 1, 2), (3, 4)]
-    assert make_scene("braid", dict(BRAID, pack=1)).pack_groups(range(2), 1, "CPU", m) \
+    assert replica_groups(s, range(4), 2, "CPU", m) == [(0, 1), (2, 3)]
+    assert replica_groups(s, range(5), 2, "CPU", m) == [(0, 1, 2), (3, 4)]
+    assert replica_groups(make_scene("braid", dict(BRAID, pack=1)), range(2), 1, "CPU", m) \
         == [(0,), (1,)]
 
 

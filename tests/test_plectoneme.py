@@ -9,7 +9,7 @@ import os
 import numpy as np
 import pytest
 
-from dnabraid.analysis import twist as atw
+from dnabraid.geometry import ribbon as atw
 from dnabraid.scenes import SceneError, make_scene
 
 Z_TOL = 4.0

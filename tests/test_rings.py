@@ -14,9 +14,9 @@ from dnabraid.forces import reference as ref
 from dnabraid.forces import reference_chiral as refc
 from dnabraid.forces import reference_twist as reft
 from dnabraid.forces.chiral import chiral_force, default_exclusion
-from dnabraid.forces.twist import ring_joints
+from dnabraid.forces.twist_frames import ring_joints
 from dnabraid.geometry.curves import gauss_linking_number, writhe
-from dnabraid.geometry.twist import (
+from dnabraid.geometry.ribbon import (
     parallel_transport,
     ring_bond_frames,
     ring_side_positions,

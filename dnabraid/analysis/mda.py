@@ -25,7 +25,7 @@ import numpy as np
 from MDAnalysis.analysis.base import AnalysisBase
 
 from . import geometry, stats
-from . import twist as _twist
+from ..geometry import ribbon as _twist
 
 __all__ = [
     "ANGSTROM_TO_NM",
@@ -292,7 +292,7 @@ class TwistWrithe(AnalysisBase):
 
     Tw includes the surface clamp (+z, +x) and the bead clamp (+z, horizontal part of the
     bead orientation vector); Wr closes the chain by vertical rays
-    (:mod:`dnabraid.analysis.twist`). Lk = Tw + Wr equals the bead's turns.
+    (:mod:`dnabraid.geometry.ribbon`). Lk = Tw + Wr equals the bead's turns.
 
     Parameters
     ----------
@@ -341,7 +341,7 @@ class TwistWrithe(AnalysisBase):
 
 
 class Plectonemes(AnalysisBase):
-    """Plectonemes per frame (:func:`dnabraid.analysis.twist.find_plectonemes`).
+    """Plectonemes per frame (:func:`dnabraid.geometry.ribbon.find_plectonemes`).
 
     Parameters
     ----------
@@ -421,7 +421,7 @@ class RingWrithe(AnalysisBase):
 
     Wr is the exact Gauss self-integral of the closed polygon
     (:func:`dnabraid.geometry.curves.writhe`); Tw sums the joint angles of the ring's bond
-    frames, seam included (:func:`dnabraid.geometry.twist.ring_twist`), so that
+    frames, seam included (:func:`dnabraid.geometry.ribbon.ring_twist`), so that
     Tw + Wr = Lk, an integer (White 1969).
 
     Parameters

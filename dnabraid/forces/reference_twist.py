@@ -1,4 +1,4 @@
-"""Numpy twin of the twist energy (:mod:`dnabraid.forces.twist`), with explicit gradients.
+"""Numpy twin of the twist energy (:mod:`dnabraid.forces.twist_frames`), with explicit gradients.
 
 Each function returns ``(energy_pN_nm, forces_pN)`` with forces of shape (N, 3), like
 :mod:`dnabraid.forces.reference`. The joint angle is
@@ -10,7 +10,7 @@ with t = T / |T| the unit tangents and u = W - (W . t) t the material vectors; t
 gradient is carried by hand through the atan2, the projections and the normalisations
 (independently of the OpenMM expression; the tests also check it by finite differences
 and check omega against the parallel-transport definition in
-:func:`dnabraid.analysis.twist.twist_angles`).
+:func:`dnabraid.geometry.ribbon.twist_angles`).
 """
 
 from __future__ import annotations
@@ -90,7 +90,7 @@ def twist_ring(pos, ring, sides, g):
 
     Bond i joins ``ring[i] -> ring[(i+1) % n]`` with side particle ``sides[i]``; joint i
     takes bond i to bond i + 1 (mod n). Built here from the ring directly (not from
-    :func:`dnabraid.forces.twist.ring_joints`), so the seam is checked independently.
+    :func:`dnabraid.forces.twist_frames.ring_joints`), so the seam is checked independently.
     """
     r = np.asarray(ring, int).ravel()
     s = np.asarray(sides, int).ravel()

@@ -3,7 +3,7 @@ and bead under force, turned n times: extension and torque against turns (the ha
 buckling, twist, writhe and plectonemes.
 
 After the DNA beads come one side particle per bond (chain ``F``; the bond's material
-frame, :mod:`dnabraid.forces.twist`) and the bead's orientation particle m (chain ``M``),
+frame, :mod:`dnabraid.forces.twist_frames`) and the bead's orientation particle m (chain ``M``),
 held horizontal at ``BEAD_ARM_NM`` from the attachment and turned by the rotational trap;
 the twist energy couples the surface frame (+z, +x), the bond frames and the bead frame
 (+z, m - r_att), so turning the bead changes the linking number. Side particles and m carry
