@@ -127,7 +127,7 @@ def test_torque_estimators_agree(twisted_run):
     assert abs(pts[0.0]["twist_torque_pN_nm"]["mean"]) < Z_TOL * pts[0.0]["twist_torque_pN_nm"]["sem"] + 1.0
     # summary carries the twist observables with units
     assert {"twist", "writhe", "linking", "plectonemes"} <= set(summ["points"][0])
-    assert "twist_torque" in summ["units"]
+    assert "twist_torque_pN_nm" in summ["units"]
 
 
 def test_mdanalysis_twist_writhe_and_plectonemes(twisted_run):

@@ -22,27 +22,36 @@ exact value in ~95 % of independent studies.
    sim(without), errors from the scatter of all replica means). The start is then the
    exact free-chain draw conditioned on being allowed (rejection), so these runs are
    longer; the drift between the first and last quarter of the replicas is shown.
-3. Cost: the per-study wall time split into its parts (instrumented with perf_counter).
+3. Cost: the per-study wall time split into its parts. Each study (``make_scene`` and
+   ``Tether.run``) runs under ``cProfile.Profile()``; the parts are the cumulative times
+   of the library's functions in ``pstats.Stats(profile).stats`` (nothing in the library
+   is replaced or wrapped). The profiler slows the Python parts of a study (exact draws,
+   reports, combine), so the wall times are those of a profiled run. The exact / fallback start counts of the shift table
+   come from the same statistics: calls of ``Tether.equilibrium_start`` and calls of
+   ``random_tether`` made by ``Tether.attach`` (the fallback when no draw is allowed).
 
-The scene validation's strand-passage check (``max_bead_spacing_nm``, pure Python, ~0.7 s
-per scene for L > 3 P, five scenes per study) is memoised here unless ``--no-memo``: it is
-deterministic and does not touch the simulation; its uncached cost is measured and shown.
+The scene validation's strand-passage check (``dnabraid.chains.passage_barrier_kT``) is
+memoised in the library; its uncached cost is measured through ``__wrapped__`` and shown.
 
-Usage: taskset -c 0 python workflows/calibration.py [--quick] [--studies 30]
-Writes workflows/results/calibration.md (+ .json, .png); the table after every case.
+Usage: taskset -c 0 python workflows/calibration.py [--quick] [--studies 30] [--out DIR]
+Writes DIR/calibration.md (+ .json, .png; DIR defaults to workflows/results); the table
+after every case.
 """
 
 from __future__ import annotations
 
 import argparse
 import contextlib
+import cProfile
 import datetime
-import functools
+import inspect
 import json
 import math
 import os
 import pathlib
 import platform
+import pstats
+import sys
 import tempfile
 import time
 import warnings
@@ -60,43 +69,15 @@ FORCES = (0.1, 1.0, 10.0)
 SHIFT_CASES = ((300.0, 0.1), (1000.0, 0.1), (300.0, 1.0))
 SHIFT_VARIANTS = (("none", False, False), ("wall", True, False),
                   ("self-avoidance", False, True), ("wall + self-avoidance", True, True))
+#: Option values of a full run and of ``--quick`` (options given explicitly win).
+FULL = {"studies": 30, "steps": 2000, "lengths": list(LENGTHS), "forces": list(FORCES),
+        "shift_studies": 10, "shift_steps": 4000,
+        "shift_cases": [f"{L:g}:{F:g}" for L, F in SHIFT_CASES]}
+QUICK = {"studies": 4, "steps": 500, "lengths": [100.0, 300.0], "forces": [1.0],
+         "shift_studies": 2, "shift_steps": 1000, "shift_cases": ["300:1"]}
 
 
 # ----------------------------------------------------------------------------- timing
-class Timers:
-    """Accumulated wall time of instrumented functions (perf_counter)."""
-
-    def __init__(self):
-        self.t = {}
-        self.n = {}
-
-    def add(self, name, dt):
-        self.t[name] = self.t.get(name, 0.0) + dt
-        self.n[name] = self.n.get(name, 0) + 1
-
-    def snapshot(self):
-        return dict(self.t)
-
-    def wrap(self, owner, attr, name, on_result=None):
-        orig = getattr(owner, attr)
-
-        @functools.wraps(orig)
-        def timed(*a, **kw):
-            t0 = time.perf_counter()
-            try:
-                res = orig(*a, **kw)
-            finally:
-                self.add(name, time.perf_counter() - t0)
-            if on_result:
-                on_result(res)
-            return res
-
-        setattr(owner, attr, timed)
-        return orig
-
-
-TIMERS = Timers()
-STARTS = {"exact": 0, "fallback": 0}
 PARTS = (("scene validation (passage check)", "validate"),
          ("build incl. exact start draws", "build"),
          ("  of which exact start draws", "start"),
@@ -108,43 +89,61 @@ PARTS = (("scene validation (passage check)", "validate"),
          ("other (run dir, checkpoints, csv, summary)", "other"))
 
 
-def instrument(memo: bool) -> None:
-    """Time the parts of a study; optionally memoise the passage-barrier check."""
-    import openmm
-
-    from dnabraid import engine, plots, reporters
-    from dnabraid.scenes import _tweezer, tether
-
-    def count_start(x):
-        STARTS["fallback" if x is None else "exact"] += 1
-
-    if memo:
-        _tweezer.max_bead_spacing_nm = functools.lru_cache(None)(_tweezer.max_bead_spacing_nm)
-        _tweezer.passage_barrier_kT = functools.lru_cache(None)(_tweezer.passage_barrier_kT)
-    TIMERS.wrap(_tweezer.TweezerScene, "check_passage_barrier", "validate")
-    TIMERS.wrap(_tweezer.TweezerScene, "build", "build")
-    TIMERS.wrap(tether.Tether, "equilibrium_start", "start", count_start)
-    TIMERS.wrap(engine.Engine, "__init__", "context")
-    TIMERS.wrap(engine.Engine, "advance", "advance")
-    TIMERS.wrap(openmm.BrownianIntegrator, "step", "step")
-    TIMERS.wrap(reporters, "combine", "combine")
-    TIMERS.wrap(plots, "extension_torque_plot", "plot")
+def code_key(fn) -> tuple:
+    """The pstats key (filename, first line, name) of a Python function."""
+    c = inspect.unwrap(fn).__code__
+    return c.co_filename, c.co_firstlineno, c.co_name
 
 
-def split(before: dict, after: dict, total: float) -> dict:
-    d = {k: after.get(k, 0.0) - before.get(k, 0.0) for k in set(after) | set(before)}
-    out = {"validate": d.get("validate", 0.0), "build": d.get("build", 0.0),
-           "start": d.get("start", 0.0), "context": d.get("context", 0.0),
-           "step": d.get("step", 0.0),
-           "advance_extra": d.get("advance", 0.0) - d.get("step", 0.0),
-           "combine": d.get("combine", 0.0), "plot": d.get("plot", 0.0)}
+def profiled_keys(scene) -> dict:
+    """part -> the pstats key of the library function whose cumulative time it is."""
+    from dnabraid import plots
+    from dnabraid.run import engine, reporters
+    from dnabraid.scenes import tether
+
+    cls = type(scene)
+    return {"validate": code_key(cls.check_passage_barrier), "build": code_key(cls.build),
+            "start": code_key(tether.Tether.equilibrium_start),
+            "context": code_key(engine.Engine.__init__),
+            "advance": code_key(engine.Engine.advance),
+            "combine": code_key(reporters.combine),
+            "plot": code_key(plots.extension_torque_plot)}
+
+
+def is_openmm_step(key) -> bool:
+    """The ``step`` method of an OpenMM integrator (the Python wrapper of openmm's SWIG
+    module; its C call below it is counted inside it)."""
+    return key[2] == "step" and "openmm" in pathlib.PurePath(key[0]).parts
+
+
+def split(st: dict, keys: dict, total: float) -> dict:
+    """The wall-time split of one study from its pstats table ``st``."""
+    ct = {part: st[k][3] if k in st else 0.0 for part, k in keys.items()}
+    ct["step"] = sum(v[3] for k, v in st.items() if is_openmm_step(k))
+    out = {"validate": ct["validate"], "build": ct["build"], "start": ct["start"],
+           "context": ct["context"], "step": ct["step"],
+           "advance_extra": ct["advance"] - ct["step"],
+           "combine": ct["combine"], "plot": ct["plot"]}
     out["other"] = total - sum(v for k, v in out.items() if k != "start")
     out["total"] = total
     return out
 
 
+def start_counts(st: dict) -> tuple[int, int]:
+    """(starts, fallback starts) of one study: calls of ``Tether.equilibrium_start``, and
+    calls of ``random_tether`` made by ``Tether.attach`` (equilibrium_start gave None)."""
+    from dnabraid.geometry import starts
+    from dnabraid.scenes import tether
+
+    es = st.get(code_key(tether.Tether.equilibrium_start))
+    rt = st.get(code_key(starts.random_tether))
+    n = es[1] if es else 0
+    fb = rt[4].get(code_key(tether.Tether.attach), (0, 0))[1] if rt else 0
+    return int(n), int(fb)
+
+
 def uncached_validation_s(length_nm: float) -> float:
-    """Wall time of one scene validation's passage check without the memo."""
+    """Wall time of one scene validation's passage check without the library's memo."""
     from dnabraid import chains
     from dnabraid.scenes import make_scene
 
@@ -153,8 +152,7 @@ def uncached_validation_s(length_nm: float) -> float:
     d = s.effective_diameter_nm
     k_kT = s.stretch_modulus_pN / s.bead_spacing_nm / s.kT
     t0 = time.perf_counter()
-    chains.passage_barrier_kT(s.bead_spacing_nm, d, k_kT)
-    chains.max_bead_spacing_nm(d, s.stretch_modulus_pN / s.kT)
+    chains.passage_barrier_kT.__wrapped__(s.bead_spacing_nm, d, k_kT)
     return time.perf_counter() - t0
 
 
@@ -177,29 +175,35 @@ def exact_for(L, F):
 
 
 def one_study(values: dict) -> dict:
-    """One ``Tether.run`` in a scratch directory: its reported extension, the replicas'
-    raw series (every sample), the verdict and the timing split."""
+    """``make_scene`` and ``Tether.run`` (profiled) in a scratch directory: its reported extension, the
+    replicas' raw series (every sample), the verdict, the timing split and the starts."""
     from dnabraid.run import reporters
     from dnabraid.scenes import make_scene
 
-    s = make_scene("tether", values)
-    before = TIMERS.snapshot()
     with tempfile.TemporaryDirectory(prefix="calib_") as td:
+        prof = cProfile.Profile()
         t0 = time.perf_counter()
-        summ = s.run(td)
+        prof.enable()
+        try:
+            s = make_scene("tether", values)  # validates the scene (the replicas are copies)
+            summ = s.run(td)
+        finally:
+            prof.disable()
         wall = time.perf_counter() - t0
         series = []
         for r in range(s.replicas):
             rdir = os.path.join(td, "replicas", f"r{r:02d}", "points")
             (pdir,) = [os.path.join(rdir, p) for p in os.listdir(rdir)]
             series.append(reporters.read_point(pdir)[0]["extension_nm"].tolist())
+    st = pstats.Stats(prof).stats
+    n_starts, n_fallback = start_counts(st)
     pt = summ["points"][0]
     e = pt["extension_nm"]
     return {"seed": values["seed"], "mean": e["mean"], "sem": e["sem"],
             "ci_halfwidth": e["ci_halfwidth"], "converged": bool(pt["converged"]),
             "reason": pt["convergence_reason"], "cut": e.get("equilibration_samples"),
-            "series": series, "wall_s": wall,
-            "split": split(before, TIMERS.snapshot(), wall)}
+            "series": series, "wall_s": wall, "split": split(st, profiled_keys(s), wall),
+            "starts": n_starts, "fallback_starts": n_fallback}
 
 
 # ----------------------------------------------------------------------------- output
@@ -234,7 +238,8 @@ def shift_table(srows) -> list[str]:
            "sim − exact free chain (nm) | shift vs none (nm) | drift last − first quarter (nm) "
            "| wall / study (s) |", "|" + "---|" * 11]
     for r in srows:
-        sh = "—" if r["variant"] == "none" else fmt_pm(r["shift"], r["shift_err"])
+        sh = ("—" if r["variant"] == "none" or r.get("shift") is None
+              else fmt_pm(r["shift"], r["shift_err"]))
         out.append(
             f"| {r['L']:g} | {r['F']:g} | {r['variant']} | {r['steps']} | "
             f"{r['K']} × {r['R']} | {r['exact_starts']}/{r['starts']} | "
@@ -261,8 +266,8 @@ def timing_table(rows, srows, uncached) -> list[str]:
                    f" | {avg['total']:.2f} | {rate:,.0f} |")
     if uncached:
         out.append("")
-        out.append("Uncached passage check per scene validation (a study validates R + 1 "
-                   "scenes): " + ", ".join(f"L = {L:g} nm: {t:.2f} s" for L, t in
+        out.append("Uncached passage check per scene validation (L > 3 P; a study "
+                   "validates its scene once, the replicas are copies): " + ", ".join(f"L = {L:g} nm: {t:.3f} s" for L, t in
                                            uncached.items()) + ".")
     return out
 
@@ -326,7 +331,9 @@ def write(out: pathlib.Path, meta: dict, rows, srows, pending, pending_shift, un
                   "64 draws; beads above z = d/2, non-neighbours ≥ 0.8 d apart), which is not "
                   "exactly the interacting model's distribution (soft wall, WCA at d), and falls "
                   "back to a random non-equilibrium tether when no draw is allowed (*exact "
-                  "starts* counts the starts that got an allowed draw, R + 1 per study: each "
+                  "starts* counts the starts that got an allowed draw (from the profile: calls of "
+                  "`Tether.equilibrium_start` less the `random_tether` fallbacks), R + 1 per "
+                  "study: each "
                   "replica's and the run's own model's). These runs are still far shorter "
                   "than the slowest transverse mode, so a start bias would remain: the *drift* "
                   "column (mean of the last quarter minus the first quarter of each replica, "
@@ -339,11 +346,15 @@ def write(out: pathlib.Path, meta: dict, rows, srows, pending, pending_shift, un
         lines += ["", "Not yet run / dropped: " + ", ".join(
             f"{L:g} nm at {F:g} pN {v}" for L, F, v in pending_shift) + "."]
     lines += ["", "## Where the wall time goes (mean per study, s)", "",
-              "Instrumented with `time.perf_counter` around the library's functions. "
-              + ("The passage check is memoised in this workflow (see below for its uncached "
-                 "cost)." if meta["memo"] else "Passage check not memoised.") +
-              " A study of R replicas builds R + 1 models (the run's own and one per replica) "
-              "and draws R + 1 exact starts.", ""]
+              "Each study runs under `cProfile`; the parts are the cumulative times "
+              "(pstats) of `TweezerScene.check_passage_barrier`, `TweezerScene.build`, "
+              "`Tether.equilibrium_start`, `Engine.__init__`, the OpenMM integrator's "
+              "`step`, `Engine.advance`, `reporters.combine` and "
+              "`plots.extension_torque_plot`; the total is the wall time of the profiled "
+              "`make_scene` + `Tether.run` (the profiler slows their Python parts). The passage check is memoised in "
+              "the library (`dnabraid.chains`; its uncached cost below). A study of R "
+              "replicas builds R + 1 models (the run's own and one per replica) and draws "
+              "R + 1 exact starts.", ""]
     lines += timing_table(rows, srows, uncached)
     lines.append("")
     out.write_text("\n".join(lines))
@@ -389,16 +400,20 @@ def plot(out: pathlib.Path, rows, R) -> None:
 # ----------------------------------------------------------------------------- main
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--quick", action="store_true", help="a ~1-minute smoke run")
-    ap.add_argument("--studies", type=int, default=30, help="independent studies per case")
+    ap.add_argument("--quick", action="store_true",
+                    help="a ~1-minute smoke run (options given explicitly still apply)")
+    ap.add_argument("--studies", type=int, help="independent studies per case (30; quick 4)")
     ap.add_argument("--replicas", type=int, default=4, help="replicas per study (R)")
-    ap.add_argument("--steps", type=int, default=2000, help="steps per replica")
-    ap.add_argument("--lengths", type=float, nargs="+", default=list(LENGTHS))
-    ap.add_argument("--forces", type=float, nargs="+", default=list(FORCES))
-    ap.add_argument("--shift-studies", type=int, default=10)
-    ap.add_argument("--shift-steps", type=int, default=4000)
-    ap.add_argument("--shift-cases", nargs="+", default=[f"{L:g}:{F:g}" for L, F in SHIFT_CASES],
-                    help="L:F pairs (nm:pN) of the shift table")
+    ap.add_argument("--steps", type=int, help="steps per replica (2000; quick 500)")
+    ap.add_argument("--lengths", type=float, nargs="+", help="contour lengths (nm)")
+    ap.add_argument("--forces", type=float, nargs="+", help="forces (pN)")
+    ap.add_argument("--shift-studies", type=int, help="studies per shift variant (10; quick 2)")
+    ap.add_argument("--shift-steps", type=int, help="steps per replica of the shift table")
+    ap.add_argument("--shift-cases", nargs="+", help="L:F pairs (nm:pN) of the shift table")
+    ap.add_argument("--shift-variants", nargs="+", default=[v for v, _, _ in SHIFT_VARIANTS],
+                    choices=[v for v, _, _ in SHIFT_VARIANTS], metavar="VARIANT",
+                    help="variants of the shift table (shifts are against 'none'): "
+                         + ", ".join(repr(v) for v, _, _ in SHIFT_VARIANTS))
     ap.add_argument("--no-shift", action="store_true", help="skip the shift table")
     ap.add_argument("--seed-base", type=int, default=1000)
     ap.add_argument("--case-budget-s", type=float, default=0.0,
@@ -408,27 +423,22 @@ def main(argv=None) -> int:
     ap.add_argument("--shift-budget-s", type=float, default=0.0,
                     help="the same per shift variant (at least 4 studies)")
     ap.add_argument("--resume", action="store_true",
-                    help="keep the cases already in the .json beside --out (same R, steps, "
+                    help="keep the cases already in --out's calibration.json (same R, steps, "
                          "seeds)")
     ap.add_argument("--table-only", action="store_true",
-                    help="rewrite the .md and .png from the .json beside --out; run nothing")
-    ap.add_argument("--no-memo", action="store_true",
-                    help="do not memoise the scene validation's passage check")
-    ap.add_argument("--out", default=str(HERE / "results" / "calibration.md"))
+                    help="rewrite the .md and .png from --out's calibration.json; run nothing")
+    ap.add_argument("--out", default=str(HERE / "results"), metavar="DIR",
+                    help="directory of calibration.md, .json, .png (default: %(default)s)")
+    ap.set_defaults(**(QUICK if ap.parse_known_args(argv)[0].quick else FULL))
     args = ap.parse_args(argv)
-    if args.quick:
-        args.studies, args.steps = 4, 500
-        args.lengths, args.forces = [100.0, 300.0], [1.0]
-        args.shift_studies, args.shift_steps = 2, 1000
-        shift_cases = ((300.0, 1.0),)
-    else:
-        shift_cases = [tuple(float(v) for v in c.split(":")) for c in args.shift_cases]
+    shift_cases = [tuple(float(v) for v in c.split(":")) for c in args.shift_cases]
+    out = pathlib.Path(args.out) / "calibration.md"
+    js_path = out.with_suffix(".json")
     if args.table_only:
-        js = json.loads(pathlib.Path(args.out).with_suffix(".json").read_text())
+        js = json.loads(js_path.read_text())
         meta, rows, srows = js["meta"], js["calibration"], js["shift"]
         for k, v in (("case_budget_s", 0.0), ("min_studies", 0)):
             meta.setdefault(k, v)
-        out = pathlib.Path(args.out)
         unc = {float(k): v for k, v in js["uncached_validation_s"].items()}
         write(out, meta, rows, srows, [], [], unc,
               auto_reading(rows, srows, meta["replicas"]))
@@ -437,28 +447,26 @@ def main(argv=None) -> int:
     from tqdm import tqdm
 
     warnings.filterwarnings("ignore", category=DeprecationWarning)
-    instrument(memo=not args.no_memo)
-    out = pathlib.Path(args.out)
     out.parent.mkdir(parents=True, exist_ok=True)
     R, K, S = args.replicas, args.studies, args.steps
     cases = [(L, F) for L in args.lengths for F in args.forces]
     shifts = [] if args.no_shift else [(L, F, v) for L, F in shift_cases
-                                       for v, _, _ in SHIFT_VARIANTS]
+                                       for v, _, _ in SHIFT_VARIANTS
+                                       if v in args.shift_variants]
     try:
         cpu = next(ln.split(":", 1)[1].strip() for ln in open("/proc/cpuinfo")
                    if ln.startswith("model name"))
     except (OSError, StopIteration):
         cpu = platform.processor()
     meta = {"date": datetime.datetime.now().strftime("%Y-%m-%d %H:%M"),
-            "argv": " ".join(argv if argv is not None else __import__("sys").argv[1:]),
+            "argv": " ".join(argv if argv is not None else sys.argv[1:]),
             "machine": f"{cpu}, {os.cpu_count()} cores shared with other work",
             "replicas": R, "studies": K, "steps": S, "seed_base": args.seed_base,
             "shift_studies": args.shift_studies, "shift_steps": args.shift_steps,
-            "memo": not args.no_memo, "wall_total_s": 0.0,
+            "timing": "cProfile", "wall_total_s": 0.0,
             "case_budget_s": args.case_budget_s, "min_studies": args.min_studies,
             "shift_budget_s": args.shift_budget_s, "wall_previous_s": 0.0}
     done, sdone = {}, {}
-    js_path = pathlib.Path(args.out).with_suffix(".json")
     if args.resume and js_path.exists():
         old = json.loads(js_path.read_text())
         om = old["meta"]
@@ -472,14 +480,12 @@ def main(argv=None) -> int:
                                                                     args.seed_base):
             sdone = {(r["L"], r["F"], r["variant"]): r for r in old["shift"]}
     uncached = {}
-    if not args.no_memo:
-        for L in sorted(set(args.lengths)):
-            from dnabraid.scenes import make_scene
+    for L in sorted(set(args.lengths)):
+        from dnabraid.scenes import make_scene
 
-            s = make_scene("tether", {"length_nm": L, "surface": False,
-                                      "self_avoidance": False})
-            if s.length_nm > 3 * s.persistence_nm:
-                uncached[L] = uncached_validation_s(L)
+        s = make_scene("tether", {"length_nm": L, "surface": False, "self_avoidance": False})
+        if s.length_nm > 3 * s.persistence_nm:
+            uncached[L] = uncached_validation_s(L)
     t_start = time.perf_counter()
     rows, srows = [], []
     total = len(cases) * K + len(shifts) * args.shift_studies
@@ -537,7 +543,6 @@ def main(argv=None) -> int:
             continue
         n_bonds, exact, _ = exact_for(L, F)
         bar.set_description(f"shift {L:g} nm {F:g} pN {variant}")
-        st0 = dict(STARTS)
         studies = []
         t_case = time.perf_counter()
         for k in range(args.shift_studies):
@@ -553,12 +558,13 @@ def main(argv=None) -> int:
         ser = [np.asarray(x) for s in studies for x in s["series"]]
         dr = np.array([np.mean(x[-max(1, len(x) // 4):]) - np.mean(x[:max(1, len(x) // 4)])
                        for x in ser])
-        n_starts = STARTS["exact"] + STARTS["fallback"] - st0["exact"] - st0["fallback"]
+        n_starts = sum(s["starts"] for s in studies)
         row = {"L": L, "F": F, "variant": variant, "steps": args.shift_steps, "R": R,
                "K": len(studies), "exact": exact, "mean": float(rm.mean()),
                "err": float(rm.std(ddof=1) / math.sqrt(rm.size)),
                "drift": float(dr.mean()), "drift_err": float(dr.std(ddof=1) / math.sqrt(dr.size)),
-               "exact_starts": STARTS["exact"] - st0["exact"], "starts": n_starts,
+               "exact_starts": n_starts - sum(s["fallback_starts"] for s in studies),
+               "starts": n_starts,
                "converged": float(np.mean([s["converged"] for s in studies])),
                "wall_s": float(np.mean([s["wall_s"] for s in studies])),
                "split": {k: float(np.mean([s["split"][k] for s in studies]))

@@ -21,7 +21,7 @@ from .. import observables as ob
 from .. import units
 from ..forces import bead_exclusion_force, pull_force, stretch_force, trap_force
 from .base import SceneError, key
-from .tweezer import TurnedScene, lockup_turns
+from .tweezer_base import TurnedScene, lockup_turns
 
 #: values of the ``mirror`` key
 MIRROR_MODES = ("off", "original", "image")

@@ -81,7 +81,7 @@ from ..run.states import Schedule
 from ..units import TWO_PI
 from .base import key, resolve_salt_alpha
 from .thermal import ThermalScene
-from .tweezer import PACK_HELP
+from .tweezer_base import PACK_HELP
 
 __all__ = ["Catenane", "RingObservables", "ChiralEnergy", "hopf_start"]
 

@@ -31,7 +31,7 @@ from ..forces.twist_frames import (
 from ..geometry import random_tether
 from ..geometry.ribbon import writhe_open
 from .base import key
-from .tweezer import TurnedScene
+from .tweezer_base import TurnedScene
 
 #: Frame arm a (side particle distance from the axis) in units of the bead spacing.
 FRAME_ARM_FRACTION = 1.0
@@ -104,7 +104,7 @@ class Plectoneme(TurnedScene):
                       rate=4.0 * k_frame / zeta_frame)
         joints = [(c0[i], c0[i + 1], c0[i + 2], sides[i], sides[i + 1]) for i in range(n - 2)]
         # interior joints stand for a bond length b, the two clamps for b/2 each: the
-        # chain's twist compliance is L / (C kT) (forces/twist.py)
+        # chain's twist compliance is L / (C kT) (forces/twist_frames.py)
         kit.add_force(twist_force(joints, g, name="twist"), "twist",
                       rate=6.0 * g / (arm * arm * zeta_frame))
         kit.add_force(twist_anchor_force([(c0[0], c0[1], sides[0])], (0, 0, 1), (1, 0, 0),

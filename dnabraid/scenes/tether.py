@@ -21,7 +21,7 @@ from .. import units
 from ..forces import pull_force
 from ..geometry import random_tether
 from .base import key
-from .tweezer import TweezerScene
+from .tweezer_base import TweezerScene
 
 
 @dataclasses.dataclass(frozen=True)

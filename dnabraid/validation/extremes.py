@@ -226,8 +226,9 @@ def run_case(case: Case, *, short: dict | None = None, workdir: str | None = Non
                 problems.append(f"energy not bounded: {e_kT:.3g} kT per particle "
                                 f"(> {MAX_ENERGY_PER_BEAD_KT})")
         if "catenation" in cols and "turns" in cols:
+            # rows hold the columns the scene's observables report (a tether has none)
             err = [abs(r["catenation"] - r["turns"]) for r in rows
-                   if r["catenation"] is not None and math.isfinite(r["catenation"])]
+                   if r.get("catenation") is not None and math.isfinite(r["catenation"])]
             if err:
                 row["catenation_error"] = float(max(err))
                 if row["catenation_error"] > MAX_CATENATION_ERROR:
