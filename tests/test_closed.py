@@ -12,10 +12,10 @@ import math
 import numpy as np
 import pytest
 
-from dnabraid.statics import closed_braid as C
 from dnabraid import scenes as scn
 from dnabraid.forces import reference as ref
 from dnabraid.geometry.curves import gauss_linking_number, writhe
+from dnabraid.statics import closed_braid as C
 
 SEED = 11
 

@@ -9,7 +9,6 @@ var / n * (1 + 2 sum_{k<n} (1 - k/n) rho^k).
 
 import logging
 import math
-import time
 
 import numpy as np
 import pytest

@@ -3,10 +3,10 @@
 import numpy as np
 import pytest
 
-from dnabraid.statics import open_knot as K
 from dnabraid import scenes as scn
 from dnabraid.forces import reference as ref
 from dnabraid.forces import segment_contact as segc
+from dnabraid.statics import open_knot as K
 
 SEED = 7
 

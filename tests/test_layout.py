@@ -93,7 +93,10 @@ def test_forces_and_geometry_stay_below():
         if m.startswith("dnabraid.forces"):
             assert not any(d.startswith(("dnabraid.analysis", "dnabraid.scenes")) for d in deps), m
         if m.startswith("dnabraid.geometry"):
-            assert all(d.startswith("dnabraid.geometry") for d in deps), (m, deps)
+            # geometry is the ground floor: only itself and the constants of units
+            assert all(d.startswith("dnabraid.geometry") or d == "dnabraid.units"
+                       for d in deps), (m, deps)
+    assert not graph()["dnabraid.units"], "units imports nothing of dnabraid"
 
 
 #: What the zero-temperature bead solvers may import (besides themselves).

@@ -14,11 +14,11 @@ from openmm import unit as u
 from test_forces import check, random_chain
 
 from dnabraid.analysis import geometry as geo
-from dnabraid.geometry import ribbon as atw
 from dnabraid.analysis.stats import mean_sem
 from dnabraid.forces import bending_force, stretch_force
 from dnabraid.forces import reference_twist as rt
 from dnabraid.forces import twist_frames as tw
+from dnabraid.geometry import ribbon as atw
 
 SEED = 20261122
 Z_TOL = 4.0

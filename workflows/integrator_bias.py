@@ -21,8 +21,8 @@ import time
 import numpy as np
 
 from dnabraid.analysis.stats import mean_sem
-from dnabraid.run.engine import Engine
 from dnabraid.geometry.curves import bending_cosines
+from dnabraid.run.engine import Engine
 from dnabraid.scenes import make_scene
 
 

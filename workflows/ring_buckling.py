@@ -29,8 +29,8 @@ import time
 
 import numpy as np
 
-from dnabraid.run import reporters
 from dnabraid.analysis.stats import bimodality
+from dnabraid.run import reporters
 from dnabraid.scenes import make_scene
 
 HERE = pathlib.Path(__file__).resolve().parent

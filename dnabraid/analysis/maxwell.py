@@ -22,7 +22,7 @@ from __future__ import annotations
 
 import numpy as np
 
-TWO_PI = 2.0 * np.pi
+from ..units import TWO_PI
 
 
 def _operator(forces, turns, ref_index: int) -> np.ndarray:

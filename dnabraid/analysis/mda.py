@@ -24,8 +24,8 @@ from __future__ import annotations
 import numpy as np
 from MDAnalysis.analysis.base import AnalysisBase
 
-from . import geometry, stats
 from ..geometry import ribbon as _twist
+from . import geometry, stats
 
 __all__ = [
     "ANGSTROM_TO_NM",

@@ -35,6 +35,7 @@ import math
 
 import numpy as np
 
+from ..units import TWO_PI
 from .curves import as_points, gauss_sum, writhe
 
 __all__ = [
@@ -52,7 +53,6 @@ __all__ = [
     "writhe_open",
 ]
 
-TWO_PI = 2.0 * math.pi
 Z = np.array([0.0, 0.0, 1.0])
 X = np.array([1.0, 0.0, 0.0])
 

@@ -60,8 +60,8 @@ import time
 import numpy as np
 from scipy.spatial import cKDTree
 
-from ..forces import segment_contact as segc
 from ..errors import DnabraidError
+from ..forces import segment_contact as segc
 from ..forces.contact import contact_exclusion_range
 from . import newton
 

@@ -24,8 +24,7 @@ import numpy as np
 from ..geometry.curves import catenation_number
 from ..scenes import make_scene
 from ..scenes.braid import LONG_BRAID
-
-TWO_PI = 2.0 * math.pi
+from ..units import TWO_PI
 
 #: The braid the cross-checks run unless overridden: the long braid (2 x 200 nm at 2 pN),
 #: a developed two-ply at n = 2, on which the tolerances of tests/test_handedness.py and
