@@ -20,6 +20,7 @@ import dnabraid
 from dnabraid.observables import Column, error_name
 from dnabraid.progress import LineProgress
 from dnabraid.run.contract import ThermalContract
+from dnabraid.run.summary import point_verdict
 from dnabraid.scenes import SCENES, make_scene
 from dnabraid.scenes.thermal import ThermalScene
 
@@ -128,10 +129,10 @@ def test_verdict_without_a_deciding_column_is_not_converged():
     """A point whose deciding columns have no value is not converged (a verdict that cannot
     fail is not a verdict)."""
     pt = {"extension_nm": {"mean": None, "sem": None}}
-    ThermalScene.point_verdict(pt, ["extension_nm"])
+    point_verdict(pt, ["extension_nm"])
     assert pt["converged"] is False
     pt = {"extension_nm": {"mean": 1.0, "converged": True, "ess": 500.0}}
-    ThermalScene.point_verdict(pt, ["extension_nm"])
+    point_verdict(pt, ["extension_nm"])
     assert pt["converged"] is True and pt["convergence_reason"] == "ok"
 
 
