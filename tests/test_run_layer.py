@@ -147,3 +147,25 @@ def test_line_progress_prints_plain_lines_with_rate_and_time_left():
     assert len(lines) == 4  # at 30 %, 50 %, 80 % (every 25 %, crossed) and the end
     assert lines[-1].startswith("braid: 100.0 %") and "step/s" in lines[-1]
     assert "left" in lines[0]
+
+
+def test_nan_inside_a_step_is_a_blow_up_naming_step_term_and_state(tmp_path):
+    """OpenMM's own NaN check throws inside ``integrator.step``; the engine reports it as a
+    SimulationBlowUp with the step range, the largest term and the saved state (it escaped
+    as a raw OpenMMException before)."""
+    import os
+
+    import numpy as np
+
+    from dnabraid.run.engine import Engine, SimulationBlowUp
+
+    m = make_scene("tether", {"length_nm": 50.0, "replicas": 1}).build()
+    e = Engine.for_model(m, platform="CPU", seed=3, threads=1)
+    pos = np.array(m.positions, float)
+    pos[5] = pos[4]  # two beads on one point: 0/0 forces, NaN coordinates in the next step
+    e.set_positions(pos)
+    with pytest.raises(SimulationBlowUp) as exc:
+        e.advance(5, str(tmp_path))
+    assert "OpenMM stopped inside steps 1-5" in str(exc.value)
+    assert exc.value.step == 5 and exc.value.term in m.forces
+    assert exc.value.saved and os.path.exists(exc.value.saved)

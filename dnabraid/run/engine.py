@@ -359,11 +359,20 @@ class Engine:
         Raises
         ------
         SimulationBlowUp
-            On NaN/inf positions or a bond stretched past MAX_BOND_STRETCH x rest length;
-            the last good state is saved to ``fail_dir/last_good_state.xml``.
+            On NaN/inf positions (OpenMM's own NaN check inside the steps included) or a
+            bond stretched past MAX_BOND_STRETCH x rest length; the last good state is
+            saved to ``fail_dir/last_good_state.xml``.
         """
         good = self.context.getState(getPositions=True, getParameters=True) if fail_dir else None
-        self.integrator.step(int(nsteps))
+        try:
+            self.integrator.step(int(nsteps))
+        except openmm.OpenMMException as exc:
+            # OpenMM checks coordinates itself and throws inside the step ("Particle
+            # coordinate is NaN"): a blow-up within these steps, reported as one
+            first = self.step + 1
+            self.step += int(nsteps)
+            self.blow_up(f"OpenMM stopped inside steps {first}-{self.step}: {exc}", good,
+                         fail_dir)
         self.step += int(nsteps)
         pos = self.positions()
         problem = None
@@ -393,15 +402,24 @@ class Engine:
         return worst, fmax
 
     def blow_up(self, problem: str, good_state=None, fail_dir: str | None = None):
+        """Raise :class:`SimulationBlowUp` naming the step, the term with the largest force
+        (in the bad state, or, when that state is not finite, in the last good one) and
+        where the last good state was saved."""
         term, fmax = self.largest_force_term()
+        where = ""
+        if not np.isfinite(fmax) and good_state is not None:
+            # a NaN state has no largest term: name the one that was largest just before
+            self.context.setPositions(good_state.getPositions())
+            term, fmax = self.largest_force_term()
+            where = " in the last good state"
         saved = None
         if good_state is not None and fail_dir:
             os.makedirs(fail_dir, exist_ok=True)
             saved = os.path.join(fail_dir, "last_good_state.xml")
             with open(saved, "w") as fh:
                 fh.write(openmm.XmlSerializer.serialize(good_state))
-        msg = (f"simulation blew up at step {self.step}: {problem}; largest force from term "
-               f"'{term}' ({fmax:.3g} pN); time step {self.dt_ns * 1e3:.4g} ps. "
+        msg = (f"simulation blew up at step {self.step}: {problem}; largest force{where} from "
+               f"term '{term}' ({fmax:.3g} pN); time step {self.dt_ns * 1e3:.4g} ps. "
                + (f"Last good state saved to {saved}. " if saved else "")
                + "Try a smaller timestep_safety or a finer bead spacing.")
         raise SimulationBlowUp(msg, step=self.step, term=term, saved=saved)
