@@ -169,3 +169,37 @@ def test_nan_inside_a_step_is_a_blow_up_naming_step_term_and_state(tmp_path):
     assert "OpenMM stopped inside steps 1-5" in str(exc.value)
     assert exc.value.step == 5 and exc.value.term in m.forces
     assert exc.value.saved and os.path.exists(exc.value.saved)
+
+
+def test_shared_starts_and_frozen_replicas_fail_the_verdict():
+    """Replicas that share a start, or a verdict column that stayed constant in a replica,
+    make a point not converged, whatever R-hat says."""
+    import numpy as np
+
+    from dnabraid.run.driver import shared_starts, start_fingerprint
+    from dnabraid.run.summary import frozen_replicas
+
+    a = np.arange(12.0).reshape(4, 3)
+    recs = [{"fingerprint": start_fingerprint(a)}, {"fingerprint": start_fingerprint(a + 1)},
+            {"fingerprint": start_fingerprint(a.copy())}, {"fingerprint": None}]
+    assert shared_starts(recs) == [[0, 2]]
+    moving = {"extension_nm": np.array([1.0, 2.0, 1.5])}
+    stuck = {"extension_nm": np.array([3.0, 3.0, 3.0])}
+    assert frozen_replicas([(moving, {}), (stuck, {})], ["extension_nm"]) == {
+        "extension_nm": [1]}
+    assert frozen_replicas([(moving, {}), (moving, {})], ["extension_nm"]) == {}
+
+
+def test_braid_replicas_from_one_start_are_not_converged(tmp_path):
+    """start_spread = 0 gives every replica the same built start: the summary records the
+    starts and no point may be called converged, however long the run."""
+    s = make_scene("braid", {"steps": 2000, "equilibration_steps": 500, "replicas": 2,
+                             "turns": [1.0], "start_spread": 0.0, "workers": 1})
+    pt = s.run(str(tmp_path / "b"))["points"][0]
+    assert not pt["converged"] and "share a start" in pt["convergence_reason"]
+    assert [r["kind"] for r in pt["starts"]] == ["built at its state"] * 2
+    own = make_scene("braid", {"steps": 2000, "equilibration_steps": 500, "replicas": 2,
+                               "turns": [1.0], "workers": 1})
+    pt = own.run(str(tmp_path / "o"))["points"][0]
+    assert "share a start" not in pt["convergence_reason"]
+    assert len({r["fingerprint"] for r in pt["starts"]}) == 2

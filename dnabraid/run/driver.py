@@ -25,9 +25,12 @@ settings.
 from __future__ import annotations
 
 import dataclasses
+import hashlib
 import json
 import os
 import time
+
+import numpy as np
 
 from .. import rundir
 from ..observables import columns_of
@@ -98,19 +101,44 @@ def _settings(scene: ThermalContract, schedule, model) -> RunSettings:
                        mirror_axis=scene.mirror_axis)
 
 
-def _starts(scene: ThermalContract, model, schedule) -> tuple[dict, list[str]]:
+def _starts(scene: ThermalContract, model, schedule) -> tuple[dict, list[str], list[dict]]:
     """The starts the scene builds for this replica (segment index -> positions or None),
-    and a note for each that could not be built."""
-    out, failed = {}, []
+    a note for each that could not be built, and what each segment starts from (its kind
+    and a fingerprint of the positions, so that shared starts can be seen)."""
+    out, failed, record = {}, [], []
     for seg in schedule:
+        if seg.start_from is not None:
+            record.append({"kind": f"continues point {seg.start_from}", "fingerprint": None})
+            continue
         if not seg.built_start:
+            record.append({"kind": "the model's start", "fingerprint":
+                           start_fingerprint(model.positions)})
             continue
         try:
             out[seg.index] = scene.start(model, seg)
+            record.append({"kind": "built at its state",
+                           "fingerprint": start_fingerprint(out[seg.index])})
         except (StartError, ValueError) as exc:
             out[seg.index] = None
             failed.append(f"{seg.tag}: {exc}")
-    return out, failed
+            record.append({"kind": "not built: the model's start, ramped",
+                           "fingerprint": start_fingerprint(model.positions)})
+    return out, failed, record
+
+
+def start_fingerprint(positions) -> str:
+    """A short hash of start positions (rounded to 1e-6 nm): equal for equal starts."""
+    x = np.round(np.asarray(positions, float), 6) + 0.0  # -0.0 -> 0.0
+    return hashlib.sha1(x.tobytes()).hexdigest()[:12]
+
+
+def shared_starts(records: list[dict]) -> list[list[int]]:
+    """Groups of replicas (indices into ``records``) whose starts are the same."""
+    groups: dict = {}
+    for i, rec in enumerate(records):
+        if rec.get("fingerprint"):
+            groups.setdefault(rec["fingerprint"], []).append(i)
+    return [g for g in groups.values() if len(g) > 1]
 
 
 def _engine(scene: ThermalContract, model, platform, threads) -> Engine:
@@ -126,14 +154,15 @@ def run_pack(job, progress=None) -> list[dict]:
     into one Context; each writes ``out/replicas/rNN``. ``job`` is (scene, replica indices,
     run directory, platform, threads); returns one record per replica."""
     base, group, out, platform, threads = job
-    members, scenes, failed = [], [], []
+    members, scenes, failed, records = [], [], [], []
     schedule = base.states()
     for r in group:
         scene = base.replica(r)
         scenes.append(scene)
         model = scene.build()
-        starts, bad = _starts(scene, model, schedule)
+        starts, bad, rec = _starts(scene, model, schedule)
         failed.append(bad)
+        records.append(rec)
         rdir = os.path.join(out, "replicas", f"r{r:02d}")
         members.append(Member(model, scene.observables(model), rdir, starts,
                               label=f"replica {r}"))
@@ -155,8 +184,8 @@ def run_pack(job, progress=None) -> list[dict]:
         dirs = run_members(engine, schedule, members, settings, pdir, pack=pack,
                            progress=progress)
     return [{"replica": r, "dirs": ds, "integrator_seed": engine.seed, "resumed": resumed,
-             "pack": tuple(group), "starts_not_built": bad}
-            for r, ds, bad in zip(group, dirs, failed)]
+             "pack": tuple(group), "starts_not_built": bad, "starts": rec}
+            for r, ds, bad, rec in zip(group, dirs, failed, records)]
 
 
 def _pack_job(job, report):
@@ -210,6 +239,7 @@ def run(scene: ThermalContract, out: str, *, platform: str = "CPU", threads: int
             mv = moves_summary(dirs)
             if mv is not None:
                 pt["rigid_moves"] = mv
+            _check_starts(pt, [dict(r["starts"][k], replica=r["replica"]) for r in results])
             points.append(pt)
         need = scene.replicas_needed(points, R)
         if need <= R:
@@ -261,6 +291,19 @@ def run(scene: ThermalContract, out: str, *, platform: str = "CPU", threads: int
     d = summary.to_dict()
     scene.plot(d, out)
     return d
+
+
+def _check_starts(pt: dict, records: list[dict]) -> None:
+    """Record each replica's start in the point and fail its verdict when replicas share a
+    start (R-hat compares replicas that must have begun apart)."""
+    pt["starts"] = records
+    shared = shared_starts(records)
+    if shared:
+        pt["converged"] = False
+        why = "; ".join("replicas " + ", ".join(str(records[i]["replica"]) for i in g)
+                        + " share a start" for g in shared)
+        pt["convergence_reason"] = (why if pt.get("convergence_reason") in (None, "ok")
+                                    else f"{pt['convergence_reason']}; {why}")
 
 
 def _units(columns: dict) -> dict:

@@ -18,7 +18,7 @@ import numpy as np
 from ..observables import error_name
 from .reporters import mean_sem_entry
 
-__all__ = ["summarise", "point_summary", "point_verdict", "state_label", "format_mean_sem",
+__all__ = ["summarise", "point_summary", "point_verdict", "frozen_replicas", "state_label", "format_mean_sem",
            "print_table", "rows", "reported"]
 
 
@@ -79,9 +79,32 @@ def point_summary(state: dict, reps: list, columns: dict, rule: dict) -> dict:
     pt["n_samples"] = int(sum(len(s["step"]) for s, _ in reps))
     pt["n_frames"] = int(sum(len(f["step"]) for _, f in reps))
     pt["n_replicas"] = len(reps)
-    point_verdict(pt, [c for c, col in columns.items() if col.verdict])
+    names = [c for c, col in columns.items() if col.verdict]
+    point_verdict(pt, names)
+    frozen = frozen_replicas(reps, names)
+    if frozen:
+        pt["converged"] = False
+        why = "; ".join(f"{c}: replica(s) {', '.join(map(str, r))} did not move"
+                        for c, r in frozen.items())
+        pt["convergence_reason"] = (why if pt["convergence_reason"] == "ok"
+                                    else f"{pt['convergence_reason']}; {why}")
     pt["label"] = state_label(state)
     return pt
+
+
+def frozen_replicas(reps: list, names) -> dict:
+    """Verdict columns (name -> replica indices) whose series stayed exactly constant in a
+    replica: a replica that did not move says nothing about convergence."""
+    out = {}
+    for c in names:
+        for k, (s, f) in enumerate(reps):
+            x = s[c] if c in s else f.get(c)
+            if x is None or len(x) < 2:
+                continue
+            x = np.asarray(x, float)
+            if np.all(np.isfinite(x)) and np.ptp(x) == 0.0:
+                out.setdefault(c, []).append(k)
+    return out
 
 
 def point_verdict(pt: dict, names) -> None:

@@ -20,6 +20,7 @@ import numpy as np
 from .. import observables as ob
 from .. import units
 from ..forces import bead_exclusion_force, pull_force, stretch_force, trap_force
+from ..run.contract import StartError
 from .base import SceneError, key
 from .tweezer_base import TurnedScene, lockup_turns
 
@@ -27,6 +28,8 @@ from .tweezer_base import TurnedScene, lockup_turns
 MIRROR_MODES = ("off", "original", "image")
 #: largest bow of an overdispersed start's braid axis, as a fraction of the strand length
 MAX_START_BOW = 0.25
+#: Draws of a replica's built start before it is declared impossible (StartError).
+MAX_START_DRAWS = 200
 #: The long braid: 2 x 200 nm at 2 pN and timestep_safety 0.3, the braid's defaults before
 #: 2026-12-01 (a developed two-ply up to n = +-3). The zero-temperature cross-checks, the
 #: extremes matrix and several workflows were set up and measured on it; the thermal
@@ -189,21 +192,29 @@ class Braid(TurnedScene):
         # steepness c and a bow of the braid's axis (amplitude a L sin(pi u) w(u) in a random
         # direction; at n = 0, a L sin(pi u) across the strands' plane), so that the
         # replicas' disagreement (R-hat) can reveal a start the run has not forgotten
-        # (Gelman & Rubin 1992 ask for starts overdispersed relative to the target).
-        # start_spread = 0, or a draw whose strands would differ in length by more than
-        # 10 %, gives the common start (c = 3, no bow).
+        # (Gelman & Rubin 1992 ask for starts overdispersed relative to the target). A draw
+        # that cannot be built, or whose strands' bond lengths would spread by more than
+        # 10 %, is drawn again from the same stream (never replaced by a shared start: the
+        # replicas' starts stay their own, so R-hat compares replicas that began apart).
+        # start_spread = 0 gives the common start (c = 3, no bow) to every replica.
+        if self.start_spread == 0.0:
+            return self._two_ply(model, n, 3.0, 0.0, 0.0)[0]
         rng = np.random.default_rng([int(self.seed), 0xB4A1D])
-        c = 3.0 + self.start_spread * (rng.uniform(2.5, 6.0) - 3.0)
-        a = self.start_spread * rng.uniform(0.0, MAX_START_BOW)
-        psi = rng.uniform(0.0, 2 * np.pi)
-        if a > 0 or c != 3.0:
+        worst = None
+        for _ in range(MAX_START_DRAWS):
+            c = 3.0 + self.start_spread * (rng.uniform(2.5, 6.0) - 3.0)
+            a = self.start_spread * rng.uniform(0.0, MAX_START_BOW)
+            psi = rng.uniform(0.0, 2 * np.pi)
             try:
                 pos, spread = self._two_ply(model, n, c, a, psi)
-                if spread <= 0.1:
-                    return pos
-            except SceneError:
-                pass
-        return self._two_ply(model, n, 3.0, 0.0, 0.0)[0]
+            except SceneError as exc:
+                worst = str(exc)
+                continue
+            if spread <= 0.1:
+                return pos
+            worst = f"bond lengths spread by {100 * spread:.0f} % (> 10 %)"
+        raise StartError(f"turns={n:g}: no start of {MAX_START_DRAWS} draws could be built "
+                         f"(last: {worst})")
 
     def _two_ply(self, model, n, c, a, psi):
         """Positions of the built start, and the relative spread of its bond lengths."""
