@@ -154,15 +154,13 @@ def test_mdanalysis_twist_writhe_and_plectonemes(twisted_run):
 def test_hat_curve_against_theory(tmp_path):
     """Below buckling C_eff from the torque slope vs Moroz-Nelson; the plateau torque after
     buckling vs sqrt(2 kT A F) (finite-size: the plateau of a short chain lies above it)."""
-    import importlib.util
+    from dnabraid.analysis.hat_curve import hat_curve
 
-    spec = importlib.util.spec_from_file_location(
-        "plectoneme_hat", os.path.join(os.path.dirname(__file__), "..", "workflows",
-                                       "plectoneme_hat.py"))
-    mod = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(mod)
-    res = mod.main(["--force", "1", "--length", "100", "--run", str(tmp_path / "run"),
-                    "--out", str(tmp_path / "hat.txt")])
+    s = make_scene("plectoneme", {"force_pN": 1.0, "length_nm": 100.0,
+                                  "turns": [0, 0.5, 1, 1.5, 2, 2.5, 3], "steps": 150000,
+                                  "equilibration_steps": 50000, "frame_interval": 2000,
+                                  "seed": 5})
+    _, res = hat_curve(s.run(str(tmp_path / "run")))
     # measured 93.8 +- 0.8 nm vs 85.7 nm: a 100-nm chain of 5-nm bonds lacks part of the
     # writhe fluctuations of Moroz-Nelson's long continuous rod (model tolerance 15 %)
     assert res["ceff_sim"] == pytest.approx(res["ceff_theory"],
@@ -172,3 +170,15 @@ def test_hat_curve_against_theory(tmp_path):
     # buckling torque (entropy of the plectoneme, Marko, PRE 76, 021926 (2007))
     assert 1.0 * res["gamma_b_theory"] < res["plateau_torque"] < 1.6 * res["gamma_b_theory"]
     assert 1.0 <= res["n_buckle"] <= 2.5
+
+
+def test_hat_curve_theory_values():
+    """Moroz & Nelson's C_eff and the buckling torque at F = 1 pN, A = 50 nm, C = 100 nm,
+    kT = 4.11 pN nm (independent arithmetic)."""
+    from dnabraid.analysis.hat_curve import buckling_torque, moroz_nelson_ceff
+
+    kT = 4.11
+    assert moroz_nelson_ceff(100.0, 50.0, 1.0, kT) == pytest.approx(
+        100.0 * (1.0 - 0.5 * math.sqrt(kT / 50.0)), rel=1e-12)
+    assert moroz_nelson_ceff(100.0, 50.0, 1.0, kT) == pytest.approx(85.66, abs=0.01)
+    assert buckling_torque(50.0, 1.0, kT) == pytest.approx(20.27, abs=0.01)

@@ -1,6 +1,7 @@
 """The hat curve of torsionally constrained DNA: extension and torque against turns.
 
-Runs the ``plectoneme`` scene over a turn range, then compares with rod theory:
+Runs the ``plectoneme`` scene over a turn range, then compares with rod theory
+(:func:`dnabraid.analysis.hat_curve.hat_curve`):
 
 * below buckling, the torque slope gives an effective twist stiffness
   C_eff = (dGamma/dn) L / (2 pi kT), against Moroz & Nelson (PNAS 94, 14418 (1997), Eq. 12):
@@ -26,46 +27,10 @@ tests/test_tweezer.py): treat them as lower bounds.
 from __future__ import annotations
 
 import argparse
-import math
 import os
 
-import numpy as np
-
+from dnabraid.analysis.hat_curve import hat_curve
 from dnabraid.scenes import make_scene
-
-
-def moroz_nelson_ceff(C, A, F, kT):
-    """Effective twist persistence C_eff (nm) of a stretched rod (Moroz & Nelson 1997)."""
-    return C * (1.0 - C / (4.0 * A) * math.sqrt(kT / (A * F)))
-
-
-def analyse(summary, scene):
-    kT = summary["scene"].get("temperature_K", 298.15) * 1.380649e-2
-    L, C, A, F = scene.length_nm, scene.twist_persistence_nm, scene.persistence_nm, scene.force_pN
-    pts = sorted(summary["points"], key=lambda p: p["turns"])
-    n = np.array([p["turns"] for p in pts])
-    tq = np.array([p["twist_torque_pN_nm"]["mean"] for p in pts])
-    tq_sem = np.array([p["twist_torque_pN_nm"]["sem"] for p in pts])
-    frac = np.array([np.nan if p["plectoneme_fraction"] is None else p["plectoneme_fraction"]
-                     for p in pts])  # None: no frame sampled
-    buckled = np.nonzero(frac > 0.5)[0]
-    nb = n[buckled[0]] if buckled.size else math.nan
-    gamma_b = math.sqrt(2 * kT * A * F)
-    # below buckling: points before the first buckled one with no plectoneme in any frame
-    lin = (frac == 0) & (n < nb if buckled.size else np.ones(n.size, bool))
-    out = {"kT": kT, "gamma_b_theory": gamma_b, "ceff_theory": moroz_nelson_ceff(C, A, F, kT),
-           "n_buckle": nb, "C": C}
-    if lin.sum() >= 2:
-        w = 1.0 / np.maximum(tq_sem[lin], 1e-9) ** 2
-        slope = float(np.sum(w * n[lin] * tq[lin]) / np.sum(w * n[lin] ** 2))  # through 0
-        dslope = float(1.0 / math.sqrt(np.sum(w * n[lin] ** 2)))
-        out["ceff_sim"] = slope * L / (2 * math.pi * kT)
-        out["ceff_sim_err"] = dslope * L / (2 * math.pi * kT)
-    if buckled.size:
-        after = buckled
-        out["plateau_torque"] = float(np.mean(tq[after]))
-        out["plateau_torque_err"] = float(np.sqrt(np.sum(tq_sem[after] ** 2)) / after.size)
-    return pts, out
 
 
 def main(argv=None):
@@ -89,7 +54,7 @@ def main(argv=None):
         **({"replicas": a.replicas} if a.replicas else {})})
     run = a.run or os.path.join(here, "results", f"plectoneme_F{a.force:g}_L{a.length:g}")
     summ = s.run(run)
-    pts, res = analyse(summ, s)
+    pts, res = hat_curve(summ)
     lines = [f"# plectoneme scene F = {a.force} pN, L = {a.length} nm, A = {s.persistence_nm} nm, "
              f"C = {s.twist_persistence_nm} nm, {s.salt_mM} mM; run {run}; wall "
              f"{summ['wall_time_s']:.0f} s, {summ['ns_per_bead_per_step'] or float('nan'):.0f} "

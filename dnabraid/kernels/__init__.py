@@ -1,0 +1,12 @@
+"""Compiled (numba) twins of the OpenMM energy terms, for Monte Carlo moves that need the
+energy change of a few particles in microseconds instead of a whole-Context evaluation.
+
+:class:`~dnabraid.kernels.chain.LocalEnergy` reproduces the terms of a bead chain
+(harmonic bonds, bending hinges, WCA excluded volume, wall, pull) from a built
+:class:`dnabraid.chains.Model`; :mod:`dnabraid.run.chain_moves` drives Metropolis
+crankshaft, pivot and bead moves with it.
+"""
+
+from .chain import TERMS, LocalEnergy
+
+__all__ = ["LocalEnergy", "TERMS"]

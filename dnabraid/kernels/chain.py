@@ -1,0 +1,702 @@
+"""Local energies of a bead chain, compiled with numba: the OpenMM terms of a tether
+reproduced exactly, and their change when a few particles move.
+
+Terms (dnabraid units: nm, pN, pN nm), each read from the Force of the same name in the
+model's ``openmm.System`` (its parameters converted from kJ/mol once, with
+:data:`dnabraid.units.PN_NM_IN_KJ_MOL`):
+
+* ``stretch`` (``HarmonicBondForce``, :func:`dnabraid.forces.stretch_force`):
+  U = k/2 (r - r0)^2 per bond;
+* ``bend`` (``CustomAngleForce``, :func:`dnabraid.forces.bending_force`):
+  U = kappa (1 + cos theta) = kappa (1 - cos beta) per hinge, theta the angle at the middle
+  bead, beta = pi - theta the angle between consecutive bonds;
+* ``wca`` (``CustomNonbondedForce``, :func:`dnabraid.forces.wca_force`):
+  U = 4 eps [(s/r)^12 - (s/r)^6] + eps for r <= r_c = 2^(1/6) s (the force's own
+  ``wca_rc``), over every pair that is not one of the force's exclusions (near neighbours
+  along a chain, :func:`dnabraid.forces.wca_exclusions`) and, where the force carries the
+  per-particle switch ``on``, between switched-on particles only;
+* ``wall`` (``CustomExternalForce``, :func:`dnabraid.forces.wall_force`):
+  U = k/2 (z_w - z)^2 for z < z_w, for the force's particles;
+* ``pull`` (``CustomExternalForce``, :func:`dnabraid.forces.pull_force`):
+  U = -F share_i z_i.
+
+A Force is recognised by its name and type and its energy expression is checked against
+the expression its factory writes, so a changed factory fails loudly here instead of
+silently differing. A System with any other Force (a trap, the chiral term, twist frames)
+is refused: :class:`LocalEnergy` would not know its energy.
+
+Pairs within the WCA range are found with a spatial hash: a uniform grid of cell size
+r_c (every interacting pair lies in neighbouring cells) whose cells are hashed into a
+power-of-two table of singly-indexed buckets (Teschner et al., "Optimized spatial hashing
+for collision detection of deformable objects", VMV 2003). A particle records its cell,
+and a bucket's members are matched against the queried cell, so hash collisions cost time
+but never a wrong or doubled pair. The table is built once per call (O(N)) and updated in
+place when an accepted move changes a particle's cell.
+
+The energy change of a move touches only the moved particles: bonds and hinges with a
+moved member, their wall and pull terms, WCA pairs of a moved with an unmoved particle
+(from the hash) and, unless the move is rigid, pairs of two moved particles. A rigid move
+(rotation of a whole set, as crankshaft and pivot moves are) keeps every distance, angle
+and pair energy within the moved set, so those are skipped (they change by round-off
+only).
+"""
+
+from __future__ import annotations
+
+import math
+from collections import namedtuple
+
+import numba
+import numpy as np
+import openmm
+from openmm import unit as u
+
+from ..forces import bending_force, pull_force, wall_force, wca_force
+from ..units import PN_NM_IN_KJ_MOL
+
+__all__ = ["LocalEnergy", "TERMS", "run_chain_moves"]
+
+#: The terms a :class:`LocalEnergy` knows, in the order of its term arrays.
+TERMS = ("stretch", "bend", "wca", "wall", "pull")
+
+#: Cell coordinates are clamped to +-2^20 cells (5 mm at 5-nm cells) and packed in 21 bits
+#: each; clamping is monotone and 1-Lipschitz, so neighbouring cells stay neighbours.
+_CELL_OFF = 1 << 20
+_CELL_MAX = (1 << 20) - 2
+
+# Parameters of the terms, in numba-friendly arrays (a namedtuple is passed whole to the
+# compiled functions). Index arrays int64, per-particle flags uint8, energies pN nm.
+_Params = namedtuple("_Params", [
+    "n",
+    # stretch: bonds (i, j), k (pN/nm), r0 (nm); per-particle CSR of the bonds it is in
+    "has_bond", "b_i", "b_j", "b_k", "b_r0", "b_ptr", "b_list",
+    # bend: hinges (i, j, k) and kappa (pN nm); per-particle CSR of the hinges it is in
+    "has_bend", "a_i", "a_j", "a_k", "kappa", "a_ptr", "a_list",
+    # wca: switch per particle, eps (pN nm), sigma^2, r_c^2 (nm^2), cell size (nm),
+    # sorted per-particle CSR of excluded partners
+    "has_wca", "w_on", "eps", "sig2", "rc2", "cell", "e_ptr", "e_list",
+    # wall: per-particle flag, k (pN/nm), z_w (nm)
+    "has_wall", "wall_on", "wall_k", "wall_z",
+    # pull: share per particle, F (pN)
+    "has_pull", "share", "pull_f",
+])
+
+_Hash = namedtuple("_Hash", ["head", "nxt", "key", "bucket", "inv_cell", "mask"])
+
+
+# ----------------------------------------------------------------------------- spatial hash
+@numba.njit(cache=True)
+def _cells(x, y, z, inv_cell):
+    cx = math.floor(x * inv_cell)
+    cy = math.floor(y * inv_cell)
+    cz = math.floor(z * inv_cell)
+    cx = min(max(cx, -_CELL_MAX), _CELL_MAX)
+    cy = min(max(cy, -_CELL_MAX), _CELL_MAX)
+    cz = min(max(cz, -_CELL_MAX), _CELL_MAX)
+    return np.int64(cx), np.int64(cy), np.int64(cz)
+
+
+@numba.njit(cache=True)
+def _key(cx, cy, cz):
+    return ((cx + _CELL_OFF) << 42) | ((cy + _CELL_OFF) << 21) | (cz + _CELL_OFF)
+
+
+@numba.njit(cache=True)
+def _bucket(cx, cy, cz, mask):
+    return ((cx * 73856093) ^ (cy * 19349663) ^ (cz * 83492791)) & mask
+
+
+@numba.njit(cache=True)
+def _hash_insert(H, p, x, y, z):
+    cx, cy, cz = _cells(x, y, z, H.inv_cell)
+    b = _bucket(cx, cy, cz, H.mask)
+    H.key[p] = _key(cx, cy, cz)
+    H.bucket[p] = b
+    H.nxt[p] = H.head[b]
+    H.head[b] = p
+
+
+@numba.njit(cache=True)
+def _hash_remove(H, p):
+    b = H.bucket[p]
+    q = H.head[b]
+    if q == p:
+        H.head[b] = H.nxt[p]
+    else:
+        while q >= 0:
+            if H.nxt[q] == p:
+                H.nxt[q] = H.nxt[p]
+                break
+            q = H.nxt[q]
+    H.nxt[p] = -1
+    H.bucket[p] = -1
+
+
+@numba.njit(cache=True)
+def _hash_move(H, p, x, y, z):
+    """Re-file particle p (already in the table) at (x, y, z) if its cell changed."""
+    cx, cy, cz = _cells(x, y, z, H.inv_cell)
+    if _key(cx, cy, cz) != H.key[p]:
+        _hash_remove(H, p)
+        _hash_insert(H, p, x, y, z)
+
+
+@numba.njit(cache=True)
+def _hash_build(pos, on, cell_nm):
+    n = pos.shape[0]
+    nb = 64
+    while nb < 2 * n:
+        nb *= 2
+    H = _Hash(np.full(nb, -1, np.int64), np.full(n, -1, np.int64), np.zeros(n, np.int64),
+              np.full(n, -1, np.int64), 1.0 / cell_nm, np.int64(nb - 1))
+    for p in range(n):
+        if on[p]:
+            _hash_insert(H, p, pos[p, 0], pos[p, 1], pos[p, 2])
+    return H
+
+
+# ------------------------------------------------------------------------------- pair terms
+@numba.njit(cache=True)
+def _excluded(P, p, q):
+    for t in range(P.e_ptr[p], P.e_ptr[p + 1]):
+        if P.e_list[t] == q:
+            return True
+    return False
+
+
+@numba.njit(cache=True)
+def _wca_pair(r2, P):
+    if r2 > P.rc2:  # OpenMM: step(rc - r) is 1 at r = rc
+        return 0.0
+    s6 = (P.sig2 / r2) ** 3
+    return 4.0 * P.eps * (s6 * s6 - s6) + P.eps
+
+
+@numba.njit(cache=True)
+def _wca_site(P, H, pos, moved, p, x, y, z, qmin):
+    """WCA energy of particle p placed at (x, y, z) with every unmoved, switched-on,
+    non-excluded particle q > qmin in the table."""
+    cx, cy, cz = _cells(x, y, z, H.inv_cell)
+    e = 0.0
+    for dx in range(-1, 2):
+        for dy in range(-1, 2):
+            for dz in range(-1, 2):
+                k = _key(cx + dx, cy + dy, cz + dz)
+                q = H.head[_bucket(cx + dx, cy + dy, cz + dz, H.mask)]
+                while q >= 0:
+                    if H.key[q] == k and q > qmin and q != p and moved[q] == 0:
+                        ddx = pos[q, 0] - x
+                        ddy = pos[q, 1] - y
+                        ddz = pos[q, 2] - z
+                        r2 = ddx * ddx + ddy * ddy + ddz * ddz
+                        if r2 <= P.rc2 and not _excluded(P, p, q):
+                            e += _wca_pair(r2, P)
+                    q = H.nxt[q]
+    return e
+
+
+# ----------------------------------------------------------------------- bonded helpers
+@numba.njit(cache=True)
+def _at(pos, new, moved, p, c):
+    """Coordinate c of particle p after the move (``moved[p]`` = slot + 1, 0 = unmoved)."""
+    s = moved[p]
+    if s > 0:
+        return new[s - 1, c]
+    return pos[p, c]
+
+
+@numba.njit(cache=True)
+def _bond_e(xi, yi, zi, xj, yj, zj, k, r0):
+    dx = xj - xi
+    dy = yj - yi
+    dz = zj - zi
+    d = math.sqrt(dx * dx + dy * dy + dz * dz) - r0
+    return 0.5 * k * d * d
+
+
+@numba.njit(cache=True)
+def _bend_e(xi, yi, zi, xj, yj, zj, xk, yk, zk, kappa):
+    ax = xj - xi
+    ay = yj - yi
+    az = zj - zi
+    bx = xk - xj
+    by = yk - yj
+    bz = zk - zj
+    c = (ax * bx + ay * by + az * bz) / math.sqrt(
+        (ax * ax + ay * ay + az * az) * (bx * bx + by * by + bz * bz))
+    return kappa * (1.0 - c)
+
+
+@numba.njit(cache=True)
+def _wall_e(z, P):
+    d = P.wall_z - z
+    if d > 0.0:
+        return 0.5 * P.wall_k * d * d
+    return 0.0
+
+
+# --------------------------------------------------------------------------- energies
+@numba.njit(cache=True)
+def _total(pos, P, out):
+    """Every term's energy (pN nm) at ``pos`` into ``out`` (order of :data:`TERMS`)."""
+    for t in range(5):
+        out[t] = 0.0
+    if P.has_bond:
+        for b in range(P.b_i.shape[0]):
+            i = P.b_i[b]
+            j = P.b_j[b]
+            out[0] += _bond_e(pos[i, 0], pos[i, 1], pos[i, 2], pos[j, 0], pos[j, 1],
+                              pos[j, 2], P.b_k[b], P.b_r0[b])
+    if P.has_bend:
+        for a in range(P.a_i.shape[0]):
+            i = P.a_i[a]
+            j = P.a_j[a]
+            k = P.a_k[a]
+            out[1] += _bend_e(pos[i, 0], pos[i, 1], pos[i, 2], pos[j, 0], pos[j, 1],
+                              pos[j, 2], pos[k, 0], pos[k, 1], pos[k, 2], P.kappa)
+    if P.has_wca:
+        H = _hash_build(pos, P.w_on, P.cell)
+        moved = np.zeros(P.n, np.int64)
+        for p in range(P.n):
+            if P.w_on[p]:
+                out[2] += _wca_site(P, H, pos, moved, p, pos[p, 0], pos[p, 1], pos[p, 2], p)
+    for p in range(P.n):
+        if P.has_wall and P.wall_on[p]:
+            out[3] += _wall_e(pos[p, 2], P)
+        if P.has_pull and P.share[p] != 0.0:
+            out[4] -= P.pull_f * P.share[p] * pos[p, 2]
+
+
+@numba.njit(cache=True)
+def _delta(pos, idx, new, moved, rigid, P, H, out):
+    """Energy change (pN nm) when particles ``idx`` move to ``new``; per term into ``out``.
+
+    ``moved[p]`` must hold the slot + 1 of every moved particle (0 for the others) and
+    ``H`` the table of the unmoved particles' positions (moved particles in it are
+    skipped). ``rigid``: the move is a rigid motion of the moved set, whose internal terms
+    are then left out.
+    """
+    for t in range(5):
+        out[t] = 0.0
+    m = idx.shape[0]
+    for a in range(m):
+        p = idx[a]
+        if P.has_bond:
+            for t in range(P.b_ptr[p], P.b_ptr[p + 1]):
+                b = P.b_list[t]
+                i = P.b_i[b]
+                j = P.b_j[b]
+                q = j if i == p else i
+                if moved[q] > 0 and (rigid or q < p):
+                    continue
+                e0 = _bond_e(pos[i, 0], pos[i, 1], pos[i, 2], pos[j, 0], pos[j, 1],
+                             pos[j, 2], P.b_k[b], P.b_r0[b])
+                e1 = _bond_e(_at(pos, new, moved, i, 0), _at(pos, new, moved, i, 1),
+                             _at(pos, new, moved, i, 2), _at(pos, new, moved, j, 0),
+                             _at(pos, new, moved, j, 1), _at(pos, new, moved, j, 2),
+                             P.b_k[b], P.b_r0[b])
+                out[0] += e1 - e0
+        if P.has_bend:
+            for t in range(P.a_ptr[p], P.a_ptr[p + 1]):
+                h = P.a_list[t]
+                i = P.a_i[h]
+                j = P.a_j[h]
+                k = P.a_k[h]
+                # count a hinge once, from its first moved member
+                first = i if moved[i] > 0 else (j if moved[j] > 0 else k)
+                if first != p:
+                    continue
+                if rigid and moved[i] > 0 and moved[j] > 0 and moved[k] > 0:
+                    continue
+                e0 = _bend_e(pos[i, 0], pos[i, 1], pos[i, 2], pos[j, 0], pos[j, 1],
+                             pos[j, 2], pos[k, 0], pos[k, 1], pos[k, 2], P.kappa)
+                e1 = _bend_e(_at(pos, new, moved, i, 0), _at(pos, new, moved, i, 1),
+                             _at(pos, new, moved, i, 2), _at(pos, new, moved, j, 0),
+                             _at(pos, new, moved, j, 1), _at(pos, new, moved, j, 2),
+                             _at(pos, new, moved, k, 0), _at(pos, new, moved, k, 1),
+                             _at(pos, new, moved, k, 2), P.kappa)
+                out[1] += e1 - e0
+        if P.has_wca and P.w_on[p]:
+            out[2] += (_wca_site(P, H, pos, moved, p, new[a, 0], new[a, 1], new[a, 2], -1)
+                       - _wca_site(P, H, pos, moved, p, pos[p, 0], pos[p, 1], pos[p, 2], -1))
+        if P.has_wall and P.wall_on[p]:
+            out[3] += _wall_e(new[a, 2], P) - _wall_e(pos[p, 2], P)
+        if P.has_pull and P.share[p] != 0.0:
+            out[4] -= P.pull_f * P.share[p] * (new[a, 2] - pos[p, 2])
+    if P.has_wca and not rigid:
+        for a in range(m):
+            p = idx[a]
+            if not P.w_on[p]:
+                continue
+            for c in range(a + 1, m):
+                q = idx[c]
+                if not P.w_on[q] or _excluded(P, p, q):
+                    continue
+                dx = new[c, 0] - new[a, 0]
+                dy = new[c, 1] - new[a, 1]
+                dz = new[c, 2] - new[a, 2]
+                e1 = _wca_pair(dx * dx + dy * dy + dz * dz, P)
+                dx = pos[q, 0] - pos[p, 0]
+                dy = pos[q, 1] - pos[p, 1]
+                dz = pos[q, 2] - pos[p, 2]
+                out[2] += e1 - _wca_pair(dx * dx + dy * dy + dz * dz, P)
+    return out[0] + out[1] + out[2] + out[3] + out[4]
+
+
+@numba.njit(cache=True)
+def _delta_once(pos, idx, new, P, out):
+    """:func:`_delta` with a table built for this call and any move (not rigid)."""
+    moved = np.zeros(P.n, np.int64)
+    for a in range(idx.shape[0]):
+        moved[idx[a]] = a + 1
+    if P.has_wca:
+        H = _hash_build(pos, P.w_on, P.cell)
+    else:
+        H = _hash_build(pos[:0], P.w_on[:0], 1.0)
+    return _delta(pos, idx, new, moved, False, P, H, out)
+
+
+# ------------------------------------------------------------------------ Monte Carlo
+@numba.njit(cache=True)
+def _rotation(ax, ay, az, theta):
+    """Rotation matrix by ``theta`` about the unit vector (ax, ay, az) (Rodrigues)."""
+    c = math.cos(theta)
+    s = math.sin(theta)
+    t = 1.0 - c
+    R = np.empty((3, 3))
+    R[0, 0] = c + ax * ax * t
+    R[0, 1] = ax * ay * t - az * s
+    R[0, 2] = ax * az * t + ay * s
+    R[1, 0] = ay * ax * t + az * s
+    R[1, 1] = c + ay * ay * t
+    R[1, 2] = ay * az * t - ax * s
+    R[2, 0] = az * ax * t - ay * s
+    R[2, 1] = az * ay * t + ax * s
+    R[2, 2] = c + az * az * t
+    return R
+
+
+@numba.njit(cache=True)
+def _rotate_into(pos, R, cx, cy, cz, p, new, a):
+    x = pos[p, 0] - cx
+    y = pos[p, 1] - cy
+    z = pos[p, 2] - cz
+    new[a, 0] = R[0, 0] * x + R[0, 1] * y + R[0, 2] * z + cx
+    new[a, 1] = R[1, 0] * x + R[1, 1] * y + R[1, 2] * z + cy
+    new[a, 2] = R[2, 0] * x + R[2, 1] * y + R[2, 2] * z + cz
+
+
+@numba.njit(cache=True)
+def run_chain_moves(pos, P, c_ptr, c_beads, c_fixed, mobile, cum, crank_max, crank_angle,
+                    pivot_angle, bead_nm, kT, uni, gau, stats, terms):
+    """Metropolis crankshaft, pivot and bead moves on ``pos`` (modified in place).
+
+    Parameters
+    ----------
+    pos : float64 (N, 3), nm
+    P : _Params
+    c_ptr, c_beads : int64
+        Chains in CSR form: beads of chain c are ``c_beads[c_ptr[c]:c_ptr[c + 1]]``.
+    c_fixed : int64 (len(c_beads) + 1,)
+        Prefix counts of immobile beads along ``c_beads``.
+    mobile : int64
+        Mobile chain beads (for bead moves).
+    cum : float64 (3,)
+        Cumulative probabilities of crankshaft, pivot, bead moves.
+    crank_max : int
+        Most beads of a crankshaft arc.
+    crank_angle, pivot_angle : float
+        Largest rotation angles (rad).
+    bead_nm : float
+        Radius of the bead move's ball (nm).
+    kT : float
+        pN nm.
+    uni : float64 (n, 6), gau : float64 (n, 3)
+        Uniform [0, 1) and standard normal numbers, one row per proposal.
+    stats : int64 (3, 3)
+        Added to: rows crankshaft, pivot, bead; columns attempted, refused, accepted.
+    terms : float64 (5,)
+        Added to: the accepted energy change of each term (pN nm).
+
+    Returns
+    -------
+    float
+        Sum of |dE| over the accepted moves (pN nm), the scale of the round-off in
+        ``terms``.
+    """
+    n = pos.shape[0]
+    nch = c_ptr.shape[0] - 1
+    nmob = mobile.shape[0]
+    if P.has_wca:
+        H = _hash_build(pos, P.w_on, P.cell)
+    else:
+        H = _hash_build(pos[:0], P.w_on[:0], 1.0)
+    moved = np.zeros(n, np.int64)
+    idx = np.empty(n, np.int64)
+    new = np.empty((n, 3))
+    dterm = np.zeros(5)
+    absum = 0.0
+    for t in range(uni.shape[0]):
+        r = uni[t, 0]
+        kind = 0 if r < cum[0] else (1 if r < cum[1] else 2)
+        stats[kind, 0] += 1
+        ch = min(int(uni[t, 1] * nch), nch - 1)
+        s = c_ptr[ch]
+        nb = c_ptr[ch + 1] - s
+        m = 0
+        if kind == 0:
+            # crankshaft: beads i..j turned about the line through beads i-1 and j+1
+            mmax = min(crank_max, nb - 2)
+            if mmax < 1:
+                stats[kind, 1] += 1
+                continue
+            ln = 1 + min(int(uni[t, 3] * mmax), mmax - 1)
+            i = 1 + min(int(uni[t, 2] * (nb - 1 - ln)), nb - 2 - ln)
+            j = i + ln - 1
+            pa = c_beads[s + i - 1]
+            pb = c_beads[s + j + 1]
+            ax = pos[pb, 0] - pos[pa, 0]
+            ay = pos[pb, 1] - pos[pa, 1]
+            az = pos[pb, 2] - pos[pa, 2]
+            nrm = math.sqrt(ax * ax + ay * ay + az * az)
+            if c_fixed[s + j + 1] - c_fixed[s + i] > 0 or nrm < 1e-9:
+                stats[kind, 1] += 1
+                continue
+            R = _rotation(ax / nrm, ay / nrm, az / nrm, crank_angle * (2.0 * uni[t, 4] - 1.0))
+            for k in range(i, j + 1):
+                p = c_beads[s + k]
+                _rotate_into(pos, R, pos[pa, 0], pos[pa, 1], pos[pa, 2], p, new, m)
+                idx[m] = p
+                m += 1
+                moved[p] = m
+        elif kind == 1:
+            # pivot: beads i..end turned about bead i-1 by a random rotation
+            if nb < 2:
+                stats[kind, 1] += 1
+                continue
+            i = 1 + min(int(uni[t, 2] * (nb - 1)), nb - 2)
+            gx = gau[t, 0]
+            gy = gau[t, 1]
+            gz = gau[t, 2]
+            nrm = math.sqrt(gx * gx + gy * gy + gz * gz)
+            if c_fixed[s + nb] - c_fixed[s + i] > 0 or nrm == 0.0:
+                stats[kind, 1] += 1
+                continue
+            R = _rotation(gx / nrm, gy / nrm, gz / nrm, pivot_angle * (2.0 * uni[t, 4] - 1.0))
+            pc = c_beads[s + i - 1]
+            for k in range(i, nb):
+                p = c_beads[s + k]
+                _rotate_into(pos, R, pos[pc, 0], pos[pc, 1], pos[pc, 2], p, new, m)
+                idx[m] = p
+                m += 1
+                moved[p] = m
+        else:
+            # one bead displaced uniformly in a ball
+            gx = gau[t, 0]
+            gy = gau[t, 1]
+            gz = gau[t, 2]
+            nrm = math.sqrt(gx * gx + gy * gy + gz * gz)
+            if nmob == 0 or nrm == 0.0:
+                stats[kind, 1] += 1
+                continue
+            p = mobile[min(int(uni[t, 2] * nmob), nmob - 1)]
+            rad = bead_nm * uni[t, 3] ** (1.0 / 3.0) / nrm
+            new[0, 0] = pos[p, 0] + rad * gx
+            new[0, 1] = pos[p, 1] + rad * gy
+            new[0, 2] = pos[p, 2] + rad * gz
+            idx[0] = p
+            m = 1
+            moved[p] = 1
+        dE = _delta(pos, idx[:m], new[:m], moved, kind < 2, P, H, dterm)
+        if math.isfinite(dE) and (dE <= 0.0 or uni[t, 5] < math.exp(-dE / kT)):
+            stats[kind, 2] += 1
+            absum += abs(dE)
+            for c in range(5):
+                terms[c] += dterm[c]
+            for a in range(m):
+                p = idx[a]
+                pos[p, 0] = new[a, 0]
+                pos[p, 1] = new[a, 1]
+                pos[p, 2] = new[a, 2]
+                if P.has_wca and P.w_on[p]:
+                    _hash_move(H, p, new[a, 0], new[a, 1], new[a, 2])
+        for a in range(m):
+            moved[idx[a]] = 0
+    return absum
+
+
+# ------------------------------------------------------------------------------ Python API
+def _csr(n: int, members: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Per-particle lists of the rows of ``members`` (rows x k) that contain it."""
+    rows = np.repeat(np.arange(len(members)), members.shape[1]) if members.size else \
+        np.zeros(0, np.int64)
+    parts = members.ravel()
+    order = np.argsort(parts, kind="stable")
+    ptr = np.zeros(n + 1, np.int64)
+    np.add.at(ptr, parts + 1, 1)
+    return np.cumsum(ptr).astype(np.int64), rows[order].astype(np.int64)
+
+
+def _global(force, name: str) -> float:
+    for k in range(force.getNumGlobalParameters()):
+        if force.getGlobalParameterName(k) == name:
+            return float(force.getGlobalParameterDefaultValue(k))
+    raise ValueError(f"LocalEnergy: force {force.getName()!r} has no global parameter {name!r}")
+
+
+def _check_expr(force, expected: str) -> None:
+    got = force.getEnergyFunction()
+    if got != expected:
+        raise ValueError(f"LocalEnergy: force {force.getName()!r} has the energy {got!r}; the "
+                         f"kernel reproduces {expected!r} only")
+
+
+class LocalEnergy:
+    """The energy of a bead-chain model and its change under local moves, compiled.
+
+    Parameters
+    ----------
+    model : dnabraid.chains.Model
+        A built model whose System holds only the terms of :data:`TERMS` (any subset,
+        named as the chain kit names them). Parameters are the Forces' default values
+        (a protocol that changes a global parameter in the Context is not seen).
+
+    Attributes
+    ----------
+    terms : tuple of str
+        The terms present, a subset of :data:`TERMS`.
+    n : int
+        Particles.
+
+    Raises
+    ------
+    ValueError
+        For a Force the kernels do not reproduce (another name, type or expression).
+    """
+
+    def __init__(self, model):
+        system = model.system
+        n = system.getNumParticles()
+        self.n = n
+        z = np.zeros(0, np.int64)
+        fz = np.zeros(0)
+        p = dict(n=n, has_bond=False, b_i=z, b_j=z, b_k=fz, b_r0=fz,
+                 b_ptr=np.zeros(n + 1, np.int64), b_list=z,
+                 has_bend=False, a_i=z, a_j=z, a_k=z, kappa=0.0,
+                 a_ptr=np.zeros(n + 1, np.int64), a_list=z,
+                 has_wca=False, w_on=np.zeros(n, np.uint8), eps=0.0, sig2=1.0, rc2=0.0,
+                 cell=1.0, e_ptr=np.zeros(n + 1, np.int64), e_list=z,
+                 has_wall=False, wall_on=np.zeros(n, np.uint8), wall_k=0.0, wall_z=0.0,
+                 has_pull=False, share=np.zeros(n), pull_f=0.0)
+        present = []
+        for f in system.getForces():
+            name = f.getName()
+            if name == "stretch" and isinstance(f, openmm.HarmonicBondForce):
+                nb = f.getNumBonds()
+                ij = np.zeros((nb, 2), np.int64)
+                k = np.zeros(nb)
+                r0 = np.zeros(nb)
+                for b in range(nb):
+                    i, j, r, kk = f.getBondParameters(b)
+                    ij[b] = (i, j)
+                    r0[b] = r.value_in_unit(u.nanometer)
+                    k[b] = kk.value_in_unit(u.kilojoule_per_mole / u.nanometer**2) \
+                        / PN_NM_IN_KJ_MOL
+                ptr, lst = _csr(n, ij)
+                p.update(has_bond=nb > 0, b_i=ij[:, 0].copy(), b_j=ij[:, 1].copy(), b_k=k,
+                         b_r0=r0, b_ptr=ptr, b_list=lst)
+            elif name == "bend" and isinstance(f, openmm.CustomAngleForce):
+                _check_expr(f, bending_force([], 1.0, name=name).getEnergyFunction())
+                na = f.getNumAngles()
+                ijk = np.array([f.getAngleParameters(a)[:3] for a in range(na)],
+                               np.int64).reshape(-1, 3)
+                ptr, lst = _csr(n, ijk)
+                p.update(has_bend=na > 0, a_i=ijk[:, 0].copy(), a_j=ijk[:, 1].copy(),
+                         a_k=ijk[:, 2].copy(), kappa=_global(f, f"{name}_kappa")
+                         / PN_NM_IN_KJ_MOL, a_ptr=ptr, a_list=lst)
+            elif name == "wca" and isinstance(f, openmm.CustomNonbondedForce):
+                self._read_wca(f, n, p)
+            elif name == "wall" and isinstance(f, openmm.CustomExternalForce):
+                _check_expr(f, wall_force([], 0.0, 1.0, name=name).getEnergyFunction())
+                on = np.zeros(n, np.uint8)
+                for k in range(f.getNumParticles()):
+                    on[f.getParticleParameters(k)[0]] = 1
+                p.update(has_wall=bool(on.any()), wall_on=on,
+                         wall_k=_global(f, f"{name}_k") / PN_NM_IN_KJ_MOL,
+                         wall_z=_global(f, f"{name}_z"))
+            elif name == "pull" and isinstance(f, openmm.CustomExternalForce):
+                _check_expr(f, pull_force([], [], 1.0, name=name).getEnergyFunction())
+                share = np.zeros(n)
+                for k in range(f.getNumParticles()):
+                    i, par = f.getParticleParameters(k)
+                    share[i] += float(par[0])
+                p.update(has_pull=bool(share.any()), share=share,
+                         pull_f=_global(f, f"{name}_f") / PN_NM_IN_KJ_MOL)
+            else:
+                raise ValueError(f"LocalEnergy: no kernel for force {name!r} "
+                                 f"({type(f).__name__}); it knows {', '.join(TERMS)}")
+            present.append(name)
+        self.terms = tuple(t for t in TERMS if t in present)
+        self.params = _Params(**p)
+        self._out = np.zeros(5)
+
+    def _read_wca(self, f, n: int, p: dict) -> None:
+        name = f.getName()
+        switched = f.getNumPerParticleParameters() > 0
+        _check_expr(f, wca_force(0, 1.0, 1.0, particles=[] if switched else None,
+                                 name=name).getEnergyFunction())
+        if f.getNonbondedMethod() != openmm.CustomNonbondedForce.CutoffNonPeriodic \
+                or f.getNumInteractionGroups() or f.getUseSwitchingFunction():
+            raise ValueError(f"LocalEnergy: force {name!r} must be a plain non-periodic "
+                             "cutoff without interaction groups or switching")
+        sigma = _global(f, f"{name}_sigma")
+        rc = min(_global(f, f"{name}_rc"), f.getCutoffDistance().value_in_unit(u.nanometer))
+        on = np.ones(n, np.uint8)
+        if switched:
+            for k in range(n):
+                on[k] = 1 if f.getParticleParameters(k)[0] != 0.0 else 0
+        ne = f.getNumExclusions()
+        ex = np.array([f.getExclusionParticles(k) for k in range(ne)], np.int64).reshape(-1, 2)
+        both = np.concatenate([ex, ex[:, ::-1]])
+        both = both[np.lexsort((both[:, 1], both[:, 0]))]
+        ptr = np.zeros(n + 1, np.int64)
+        np.add.at(ptr, both[:, 0] + 1, 1)
+        p.update(has_wca=True, w_on=on, eps=_global(f, f"{name}_eps") / PN_NM_IN_KJ_MOL,
+                 sig2=sigma * sigma, rc2=rc * rc, cell=rc, e_ptr=np.cumsum(ptr),
+                 e_list=both[:, 1].copy())
+
+    def _pos(self, pos) -> np.ndarray:
+        pos = np.ascontiguousarray(pos, dtype=np.float64)
+        if pos.shape != (self.n, 3):
+            raise ValueError(f"positions must have shape ({self.n}, 3), got {pos.shape}")
+        return pos
+
+    def total_terms(self, pos) -> dict:
+        """Energy of each present term at ``pos`` (nm), pN nm."""
+        _total(self._pos(pos), self.params, self._out)
+        return {t: float(self._out[TERMS.index(t)]) for t in self.terms}
+
+    def total(self, pos) -> float:
+        """Total energy at ``pos`` (nm), pN nm."""
+        _total(self._pos(pos), self.params, self._out)
+        return float(self._out.sum())
+
+    def _delta(self, pos, idx, new_xyz):
+        pos = self._pos(pos)
+        idx = np.ascontiguousarray(np.atleast_1d(idx), dtype=np.int64)
+        new = np.ascontiguousarray(new_xyz, dtype=np.float64).reshape(-1, 3)
+        if len(idx) != len(new) or len(np.unique(idx)) != len(idx):
+            raise ValueError("idx must be distinct particles, one row of new_xyz each")
+        if len(idx) and (idx.min() < 0 or idx.max() >= self.n):
+            raise ValueError(f"idx out of range [0, {self.n})")
+        return float(_delta_once(pos, idx, new, self.params, self._out))
+
+    def delta(self, pos, idx, new_xyz) -> float:
+        """Energy change (pN nm) when particles ``idx`` move from ``pos`` to ``new_xyz``
+        (shape (len(idx), 3), nm), from the moved particles alone."""
+        return self._delta(pos, idx, new_xyz)
+
+    def delta_terms(self, pos, idx, new_xyz) -> dict:
+        """:meth:`delta` per present term (pN nm)."""
+        self._delta(pos, idx, new_xyz)
+        return {t: float(self._out[TERMS.index(t)]) for t in self.terms}

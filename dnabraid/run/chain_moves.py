@@ -1,0 +1,252 @@
+"""Metropolis crankshaft, pivot and bead moves of open bead chains with compiled local
+energies (hybrid Brownian dynamics / Monte Carlo for tethers).
+
+Brownian dynamics relaxes a chain's slowest mode in a time ~ zeta L^2 / (pi^2 F): a 600-nm
+tether at 0.3 pN needs far more steps than a run can afford (its default run ends NOT
+CONVERGED). The field's standard for equilibrium averages of such chains is Metropolis
+Monte Carlo (Metropolis et al. 1953) with crankshaft and pivot moves (Vologodskii et al.,
+J. Mol. Biol. 227, 1224 (1992); Klenin & Langowski, Biopolymers 54, 307 (2000); the pivot
+algorithm: Lal, Mol. Phys. 17, 57 (1969); Madras & Sokal, J. Stat. Phys. 50, 109 (1988)).
+Equilibrium averages do not depend on how a state is reached, so these moves, interleaved
+with the Brownian steps, leave the Boltzmann distribution unchanged; their time
+correlations are not physical (for kinetics, run without them).
+
+Moves (each proposal symmetric, so the Metropolis rule min(1, exp(-dU / kT)) alone gives
+detailed balance; kinds are drawn at random with fixed probabilities, so the mixture is
+reversible too):
+
+* ``crankshaft``: an arc of beads i..j (1 ... ``crank_max_beads`` beads, none immobile,
+  bounded by beads i-1 and j+1 of the same chain) turned by an angle uniform in
+  [-``crank_angle_rad``, ``crank_angle_rad``] about the line through beads i-1 and j+1.
+  Bond lengths are kept; the arc's position and length are drawn independently of the
+  state, and the reverse move is the same arc turned back.
+* ``pivot``: the end of a chain, beads i..last (i >= 1, none immobile), turned about bead
+  i-1 by an angle uniform in [-``pivot_angle_rad``, ``pivot_angle_rad``] about an axis
+  uniform on the sphere (R and R^-1 equally likely). It moves the attachment, so it is
+  the move that changes the extension.
+* ``bead``: one mobile bead displaced uniformly in the ball of radius ``bead_move_nm``.
+  Crankshaft and pivot keep bond lengths; this move samples them (harmonic bonds), so the
+  moves alone are ergodic and sample the exact distribution (tests/test_chain_moves.py).
+
+dU comes from :class:`dnabraid.kernels.LocalEnergy` (numba; only the moved particles'
+terms), and a whole call's proposals run in one compiled loop on a copy of the positions:
+``set_pos`` is called once. A guard checks, every ``guard_every`` calls, that the
+accepted moves' local energy changes add up to the kernel's total energy change (term by
+term, round-off) and that this equals the engine's energy change (``energy_fn``, the whole
+Context; other packed copies do not move, so the change is this replica's) within
+``guard_rel`` x |E| + ``guard_abs``: a mismatch raises :class:`RuntimeError` naming the
+term or the two numbers.
+
+Random numbers come from ``numpy.random.default_rng([seed, stream])`` (stream 0 before
+the first :meth:`ChainMoves.restart`, 1 + segment index after), drawn as whole arrays per
+call, so a resumed or repeated run makes the same moves.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+
+import numpy as np
+
+from ..kernels.chain import TERMS, LocalEnergy, run_chain_moves
+from .moves import MoveStats
+
+__all__ = ["ChainMoves", "KINDS", "GUARD_REL", "GUARD_ABS_PN_NM"]
+
+#: Move kinds, in the order of the compiled loop's statistics rows.
+KINDS = ("crankshaft", "pivot", "bead")
+
+#: Guard tolerance: relative to the larger |engine energy| before and after the call. The
+#: CPU platform evaluates the WCA pairs in single precision (positions rounded to float:
+#: ~3e-5 nm at 500 nm from the origin); workflows/benchmark_chain_moves.py measures the
+#: mismatch it leaves (the report's guard line).
+GUARD_REL = 1e-6
+#: Guard tolerance, absolute part (pN nm).
+GUARD_ABS_PN_NM = 1e-3
+
+
+class ChainMoves:
+    """Metropolis crankshaft, pivot and bead moves of open chains (module docstring); the
+    interface of :class:`dnabraid.run.moves.RigidMoves` (``restart``, ``attempt``,
+    ``summary``).
+
+    Parameters
+    ----------
+    energy : dnabraid.kernels.LocalEnergy
+        The model's energy (every term of its System).
+    chains : list of int arrays
+        Open chains, bead indices in chain order (surface -> attachment).
+    fixed : iterable of int
+        Immobile particles (never moved).
+    kT_pN_nm : float
+    moves_per_call : int
+        Proposals per call (per replica).
+    crank_angle_rad, pivot_angle_rad : float
+        Largest rotation angles (rad, <= pi); 0 leaves that kind out.
+    bead_move_nm : float
+        Radius of the bead move's ball (nm); 0 leaves bead moves out.
+    crank_max_beads : int
+        Most beads of a crankshaft arc.
+    weights : 3 floats
+        Relative probabilities of crankshaft, pivot and bead proposals (kinds left out get
+        none).
+    seed : int
+    guard_every : int
+        Calls between guard checks (the first call after every restart is checked; 0 =
+        never).
+    guard_rel, guard_abs_pN_nm : float
+        Guard tolerance of the engine comparison.
+    """
+
+    def __init__(self, energy: LocalEnergy, chains, fixed, kT_pN_nm: float, *,
+                 moves_per_call: int, crank_angle_rad: float, pivot_angle_rad: float,
+                 bead_move_nm: float, crank_max_beads: int = 8, weights=(2.0, 1.0, 1.0),
+                 seed: int = 1, guard_every: int = 100, guard_rel: float = GUARD_REL,
+                 guard_abs_pN_nm: float = GUARD_ABS_PN_NM):
+        if moves_per_call < 1:
+            raise ValueError("moves_per_call must be >= 1")
+        amps = (float(crank_angle_rad), float(pivot_angle_rad), float(bead_move_nm))
+        if min(amps) < 0 or not any(a > 0 for a in amps):
+            raise ValueError("crank_angle_rad, pivot_angle_rad and bead_move_nm must be >= 0, "
+                             "not all 0")
+        if amps[0] > math.pi or amps[1] > math.pi:
+            raise ValueError("crank_angle_rad and pivot_angle_rad must be <= pi")
+        if crank_max_beads < 1:
+            raise ValueError("crank_max_beads must be >= 1")
+        w = np.array([float(x) for x in weights], float)
+        if w.shape != (3,) or np.any(w < 0):
+            raise ValueError("weights must be 3 numbers >= 0")
+        w = np.where(np.array(amps) > 0, w, 0.0)
+        if w.sum() <= 0:
+            raise ValueError("no move kind has both a weight and an amplitude")
+        if guard_every < 0:
+            raise ValueError("guard_every must be >= 0")
+        self.energy = energy
+        self.kT = float(kT_pN_nm)
+        self.moves_per_call = int(moves_per_call)
+        self.crank_angle, self.pivot_angle, self.bead_nm = amps
+        self.crank_max = int(crank_max_beads)
+        self.weights = w / w.sum()
+        self._cum = np.cumsum(self.weights)
+        self._cum[-1] = 1.0 + 1e-12  # round-off: every uniform in [0, 1) picks a kind
+        self.seed = int(seed)
+        self.guard_every = int(guard_every)
+        self.guard_rel = float(guard_rel)
+        self.guard_abs = float(guard_abs_pN_nm)
+        chains = [np.asarray(c, np.int64) for c in chains]
+        if not chains or any(len(c) < 2 for c in chains):
+            raise ValueError("ChainMoves needs chains of >= 2 beads")
+        fixed = {int(i) for i in fixed}
+        self._c_ptr = np.concatenate([[0], np.cumsum([len(c) for c in chains])]).astype(
+            np.int64)
+        self._c_beads = np.concatenate(chains).astype(np.int64)
+        isfixed = np.array([int(i) in fixed for i in self._c_beads], np.int64)
+        self._c_fixed = np.concatenate([[0], np.cumsum(isfixed)]).astype(np.int64)
+        self._mobile = self._c_beads[isfixed == 0].copy()
+        self.kinds = [k for k, x in zip(KINDS, self.weights) if x > 0]
+        self.stats = {k: MoveStats() for k in self.kinds}
+        self._stats = np.zeros((3, 3), np.int64)
+        self.rng = np.random.default_rng([self.seed, 0])
+        self._calls = 0
+        self.guard_checks = 0
+        self.guard_max_diff = 0.0
+
+    @classmethod
+    def for_model(cls, model, **kw) -> ChainMoves:
+        """Moves of ``model.chains`` (immobile ``model.fixed``) at the model's kT, with the
+        model's :class:`~dnabraid.kernels.LocalEnergy`; keywords as the constructor's."""
+        if model.system.getNumConstraints() and kw.get("bead_move_nm", 0.0) > 0:
+            raise ValueError("bead moves would break the model's rigid bonds (constraints)")
+        return cls(LocalEnergy(model), model.chains, model.fixed, model.dna.kT, **kw)
+
+    def restart(self, stream: int) -> None:
+        """Random numbers from stream ``stream`` of this seed; statistics kept."""
+        self.rng = np.random.default_rng([self.seed, 1 + int(stream)])
+        self._calls = 0
+
+    def run(self, pos: np.ndarray, n_moves: int | None = None) -> tuple[np.ndarray, np.ndarray]:
+        """``n_moves`` proposals (default ``moves_per_call``) from ``pos`` (nm), without an
+        engine; returns (new positions, accepted energy change per term of
+        :data:`dnabraid.kernels.TERMS`, pN nm)."""
+        pos = np.array(pos, np.float64, copy=True, order="C")
+        terms, _ = self._run(pos, self.moves_per_call if n_moves is None else int(n_moves))
+        return pos, terms
+
+    def _run(self, pos: np.ndarray, n: int) -> tuple[np.ndarray, float]:
+        uni = self.rng.random((n, 6))
+        gau = self.rng.standard_normal((n, 3))
+        before = self._stats.copy()
+        terms = np.zeros(5)
+        absum = run_chain_moves(pos, self.energy.params, self._c_ptr, self._c_beads,
+                                self._c_fixed, self._mobile, self._cum, self.crank_max,
+                                self.crank_angle, self.pivot_angle, self.bead_nm, self.kT,
+                                uni, gau, self._stats, terms)
+        d = self._stats - before
+        for r, k in enumerate(KINDS):
+            if k in self.stats:
+                st = self.stats[k]
+                st.attempted += int(d[r, 0])
+                st.refused += int(d[r, 1])
+                st.accepted += int(d[r, 2])
+        return terms, float(absum)
+
+    def attempt(self, get_pos: Callable, set_pos: Callable, energy_fn: Callable) -> None:
+        """``moves_per_call`` Metropolis proposals on one replica.
+
+        ``get_pos()`` / ``set_pos(p)`` read and write the replica's positions (its own
+        frame, nm); ``energy_fn()`` is the engine's potential energy (pN nm), read only by
+        the guard.
+
+        Raises
+        ------
+        RuntimeError
+            When the guard finds the local energies and the engine's disagree.
+        """
+        pos = np.array(get_pos(), np.float64, copy=True, order="C")
+        check = self.guard_every > 0 and self._calls % self.guard_every == 0
+        self._calls += 1
+        if check:
+            e0 = float(energy_fn())
+            t0 = self.energy.total_terms(pos)
+        acc0 = self._stats[:, 2].sum()
+        terms, absum = self._run(pos, self.moves_per_call)
+        if self._stats[:, 2].sum() > acc0:
+            set_pos(pos)
+        if check:
+            self._guard(e0, t0, float(energy_fn()), self.energy.total_terms(pos), terms,
+                        absum)
+
+    def _guard(self, e0, t0, e1, t1, terms, absum) -> None:
+        acc = ", ".join(f"{k} {st.accepted}" for k, st in self.stats.items())
+        for name in self.energy.terms:
+            k = TERMS.index(name)
+            want = t1[name] - t0[name]
+            if abs(terms[k] - want) > 1e-9 * (absum + abs(t0[name]) + abs(t1[name])) + 1e-9:
+                raise RuntimeError(
+                    f"ChainMoves guard: the accepted moves changed term {name!r} by "
+                    f"{terms[k]:.10g} pN nm by their local differences, but its total by "
+                    f"{want:.10g} pN nm (LocalEnergy.delta and .total disagree; accepted "
+                    f"so far: {acc})")
+        local = sum(t1.values()) - sum(t0.values())
+        diff = abs((e1 - e0) - local)
+        self.guard_checks += 1
+        self.guard_max_diff = max(self.guard_max_diff, diff)
+        tol = self.guard_rel * max(abs(e0), abs(e1)) + self.guard_abs
+        if diff > tol:
+            per = ", ".join(f"{n} {t1[n] - t0[n]:.6g}" for n in self.energy.terms)
+            raise RuntimeError(
+                f"ChainMoves guard: this call's moves changed the local energy by "
+                f"{local:.10g} pN nm ({per}) but the engine's energy by {e1 - e0:.10g} pN nm "
+                f"(|difference| {diff:.3g} > tolerance {tol:.3g} = {self.guard_rel:g} x "
+                f"|E| + {self.guard_abs:g}); accepted so far: {acc}. The engine's System "
+                "holds a term or parameter the kernels do not reproduce")
+
+    def summary(self) -> dict:
+        """Amplitudes, the guard's record and the counts of each kind (as
+        :meth:`dnabraid.run.moves.RigidMoves.summary` writes them)."""
+        return {"crank_angle_rad": self.crank_angle, "pivot_angle_rad": self.pivot_angle,
+                "bead_move_nm": self.bead_nm, "crank_max_beads": self.crank_max,
+                "moves_per_call": self.moves_per_call, "guard_checks": self.guard_checks,
+                "guard_max_diff_pN_nm": self.guard_max_diff,
+                **{k: v.to_dict() for k, v in self.stats.items()}}
