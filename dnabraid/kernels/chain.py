@@ -64,6 +64,10 @@ TERMS = ("stretch", "bend", "wca", "wall", "pull")
 _CELL_OFF = 1 << 20
 _CELL_MAX = (1 << 20) - 2
 
+#: Hash-grid cell size / r_c (>= 1; a query scans the cells that the ball of radius r_c
+#: touches).
+CELL_FACTOR = 2.0
+
 # Parameters of the terms, in numba-friendly arrays (a namedtuple is passed whole to the
 # compiled functions). Index arrays int64, per-particle flags uint8, energies pN nm.
 _Params = namedtuple("_Params", [
@@ -74,7 +78,7 @@ _Params = namedtuple("_Params", [
     "has_bend", "a_i", "a_j", "a_k", "kappa", "a_ptr", "a_list",
     # wca: switch per particle, eps (pN nm), sigma^2, r_c^2 (nm^2), cell size (nm),
     # sorted per-particle CSR of excluded partners
-    "has_wca", "w_on", "eps", "sig2", "rc2", "cell", "e_ptr", "e_list",
+    "has_wca", "w_on", "eps", "sig2", "rc", "rc2", "cell", "e_ptr", "e_list",
     # wall: per-particle flag, k (pN/nm), z_w (nm)
     "has_wall", "wall_on", "wall_k", "wall_z",
     # pull: share per particle, F (pN)
@@ -173,16 +177,21 @@ def _wca_pair(r2, P):
 
 
 @numba.njit(cache=True)
-def _wca_site(P, H, pos, moved, p, x, y, z, qmin):
-    """WCA energy of particle p placed at (x, y, z) with every unmoved, switched-on,
-    non-excluded particle q > qmin in the table."""
-    cx, cy, cz = _cells(x, y, z, H.inv_cell)
+def _wca_site(P, H, pos, moved, p, x, y, z, qmin, stop):
+    """WCA energy (pN nm) and number of pairs within r_c of particle p placed at
+    (x, y, z) with every unmoved, switched-on, non-excluded particle q > qmin in the table;
+    the sum stops early once it exceeds ``stop`` (pair energies are >= 0)."""
+    rc = P.rc
+    inv = H.inv_cell
+    xlo, ylo, zlo = _cells(x - rc, y - rc, z - rc, inv)
+    xhi, yhi, zhi = _cells(x + rc, y + rc, z + rc, inv)
     e = 0.0
-    for dx in range(-1, 2):
-        for dy in range(-1, 2):
-            for dz in range(-1, 2):
-                k = _key(cx + dx, cy + dy, cz + dz)
-                q = H.head[_bucket(cx + dx, cy + dy, cz + dz, H.mask)]
+    cnt = 0
+    for cx in range(xlo, xhi + 1):
+        for cy in range(ylo, yhi + 1):
+            for cz in range(zlo, zhi + 1):
+                k = _key(cx, cy, cz)
+                q = H.head[_bucket(cx, cy, cz, H.mask)]
                 while q >= 0:
                     if H.key[q] == k and q > qmin and q != p and moved[q] == 0:
                         ddx = pos[q, 0] - x
@@ -191,8 +200,11 @@ def _wca_site(P, H, pos, moved, p, x, y, z, qmin):
                         r2 = ddx * ddx + ddy * ddy + ddz * ddz
                         if r2 <= P.rc2 and not _excluded(P, p, q):
                             e += _wca_pair(r2, P)
+                            cnt += 1
+                            if e > stop:
+                                return e, cnt
                     q = H.nxt[q]
-    return e
+    return e, cnt
 
 
 # ----------------------------------------------------------------------- bonded helpers
@@ -237,6 +249,21 @@ def _wall_e(z, P):
 
 # --------------------------------------------------------------------------- energies
 @numba.njit(cache=True)
+def _wca_all(pos, P, H):
+    """WCA energy (pN nm) and number of interacting pairs (r <= r_c) of the whole model."""
+    moved = np.zeros(P.n, np.int64)
+    e = 0.0
+    cnt = 0
+    for p in range(P.n):
+        if P.w_on[p]:
+            de, dc = _wca_site(P, H, pos, moved, p, pos[p, 0], pos[p, 1], pos[p, 2], p,
+                               np.inf)
+            e += de
+            cnt += dc
+    return e, cnt
+
+
+@numba.njit(cache=True)
 def _total(pos, P, out):
     """Every term's energy (pN nm) at ``pos`` into ``out`` (order of :data:`TERMS`)."""
     for t in range(5):
@@ -255,11 +282,7 @@ def _total(pos, P, out):
             out[1] += _bend_e(pos[i, 0], pos[i, 1], pos[i, 2], pos[j, 0], pos[j, 1],
                               pos[j, 2], pos[k, 0], pos[k, 1], pos[k, 2], P.kappa)
     if P.has_wca:
-        H = _hash_build(pos, P.w_on, P.cell)
-        moved = np.zeros(P.n, np.int64)
-        for p in range(P.n):
-            if P.w_on[p]:
-                out[2] += _wca_site(P, H, pos, moved, p, pos[p, 0], pos[p, 1], pos[p, 2], p)
+        out[2] = _wca_all(pos, P, _hash_build(pos, P.w_on, P.cell))[0]
     for p in range(P.n):
         if P.has_wall and P.wall_on[p]:
             out[3] += _wall_e(pos[p, 2], P)
@@ -268,16 +291,21 @@ def _total(pos, P, out):
 
 
 @numba.njit(cache=True)
-def _delta(pos, idx, new, moved, rigid, P, H, out):
+def _delta(pos, idx, new, moved, rigid, P, H, out, thr, ncon, dcon):
     """Energy change (pN nm) when particles ``idx`` move to ``new``; per term into ``out``.
 
     ``moved[p]`` must hold the slot + 1 of every moved particle (0 for the others) and
     ``H`` the table of the unmoved particles' positions (moved particles in it are
     skipped). ``rigid``: the move is a rigid motion of the moved set, whose internal terms
-    are then left out.
+    are then left out. ``ncon``: interacting WCA pairs before the move (0: none, so the
+    moved particles' old WCA energy is 0 and is not searched for). The change of that
+    number goes to ``dcon[0]``. The WCA search of the new positions stops, and the
+    function returns +inf, as soon as the change is known to exceed ``thr`` (a Metropolis
+    test that will reject; WCA pair energies are >= 0, so partial sums only grow).
     """
     for t in range(5):
         out[t] = 0.0
+    dcon[0] = 0
     m = idx.shape[0]
     for a in range(m):
         p = idx[a]
@@ -316,30 +344,56 @@ def _delta(pos, idx, new, moved, rigid, P, H, out):
                              _at(pos, new, moved, k, 0), _at(pos, new, moved, k, 1),
                              _at(pos, new, moved, k, 2), P.kappa)
                 out[1] += e1 - e0
-        if P.has_wca and P.w_on[p]:
-            out[2] += (_wca_site(P, H, pos, moved, p, new[a, 0], new[a, 1], new[a, 2], -1)
-                       - _wca_site(P, H, pos, moved, p, pos[p, 0], pos[p, 1], pos[p, 2], -1))
         if P.has_wall and P.wall_on[p]:
             out[3] += _wall_e(new[a, 2], P) - _wall_e(pos[p, 2], P)
         if P.has_pull and P.share[p] != 0.0:
             out[4] -= P.pull_f * P.share[p] * (new[a, 2] - pos[p, 2])
-    if P.has_wca and not rigid:
+    if P.has_wca:
+        # pairs of two moved particles (a rigid move keeps them)
+        if not rigid:
+            for a in range(m):
+                p = idx[a]
+                if not P.w_on[p]:
+                    continue
+                for c in range(a + 1, m):
+                    q = idx[c]
+                    if not P.w_on[q] or _excluded(P, p, q):
+                        continue
+                    dx = new[c, 0] - new[a, 0]
+                    dy = new[c, 1] - new[a, 1]
+                    dz = new[c, 2] - new[a, 2]
+                    r2 = dx * dx + dy * dy + dz * dz
+                    if r2 <= P.rc2:
+                        out[2] += _wca_pair(r2, P)
+                        dcon[0] += 1
+                    dx = pos[q, 0] - pos[p, 0]
+                    dy = pos[q, 1] - pos[p, 1]
+                    dz = pos[q, 2] - pos[p, 2]
+                    r2 = dx * dx + dy * dy + dz * dz
+                    if r2 <= P.rc2:
+                        out[2] -= _wca_pair(r2, P)
+                        dcon[0] -= 1
+        # moved against unmoved: the old pairs first (none when nothing interacts) ...
+        if ncon > 0:
+            for a in range(m):
+                p = idx[a]
+                if P.w_on[p]:
+                    e, c = _wca_site(P, H, pos, moved, p, pos[p, 0], pos[p, 1], pos[p, 2],
+                                     -1, np.inf)
+                    out[2] -= e
+                    dcon[0] -= c
+        # ... then the new ones, stopping once the move is sure to be rejected
+        rest = out[0] + out[1] + out[3] + out[4] + out[2]
         for a in range(m):
             p = idx[a]
-            if not P.w_on[p]:
-                continue
-            for c in range(a + 1, m):
-                q = idx[c]
-                if not P.w_on[q] or _excluded(P, p, q):
-                    continue
-                dx = new[c, 0] - new[a, 0]
-                dy = new[c, 1] - new[a, 1]
-                dz = new[c, 2] - new[a, 2]
-                e1 = _wca_pair(dx * dx + dy * dy + dz * dz, P)
-                dx = pos[q, 0] - pos[p, 0]
-                dy = pos[q, 1] - pos[p, 1]
-                dz = pos[q, 2] - pos[p, 2]
-                out[2] += e1 - _wca_pair(dx * dx + dy * dy + dz * dz, P)
+            if P.w_on[p]:
+                e, c = _wca_site(P, H, pos, moved, p, new[a, 0], new[a, 1], new[a, 2], -1,
+                                 thr - rest)
+                out[2] += e
+                rest += e
+                dcon[0] += c
+                if rest > thr:
+                    return np.inf
     return out[0] + out[1] + out[2] + out[3] + out[4]
 
 
@@ -353,7 +407,8 @@ def _delta_once(pos, idx, new, P, out):
         H = _hash_build(pos, P.w_on, P.cell)
     else:
         H = _hash_build(pos[:0], P.w_on[:0], 1.0)
-    return _delta(pos, idx, new, moved, False, P, H, out)
+    dcon = np.zeros(1, np.int64)
+    return _delta(pos, idx, new, moved, False, P, H, out, np.inf, 1, dcon)
 
 
 # ------------------------------------------------------------------------ Monte Carlo
@@ -431,6 +486,8 @@ def run_chain_moves(pos, P, c_ptr, c_beads, c_fixed, mobile, cum, crank_max, cra
         H = _hash_build(pos, P.w_on, P.cell)
     else:
         H = _hash_build(pos[:0], P.w_on[:0], 1.0)
+    ncon = _wca_all(pos, P, H)[1] if P.has_wca else 0
+    dcon = np.zeros(1, np.int64)
     moved = np.zeros(n, np.int64)
     idx = np.empty(n, np.int64)
     new = np.empty((n, 3))
@@ -507,8 +564,11 @@ def run_chain_moves(pos, P, c_ptr, c_beads, c_fixed, mobile, cum, crank_max, cra
             idx[0] = p
             m = 1
             moved[p] = 1
-        dE = _delta(pos, idx[:m], new[:m], moved, kind < 2, P, H, dterm)
-        if math.isfinite(dE) and (dE <= 0.0 or uni[t, 5] < math.exp(-dE / kT)):
+        # Metropolis: accept when dE <= 0 or u < exp(-dE / kT), i.e. dE < -kT ln u
+        thr = -kT * math.log(uni[t, 5]) if uni[t, 5] > 0.0 else np.inf
+        dE = _delta(pos, idx[:m], new[:m], moved, kind < 2, P, H, dterm, thr, ncon, dcon)
+        if math.isfinite(dE) and (dE <= 0.0 or dE < thr):
+            ncon += dcon[0]
             stats[kind, 2] += 1
             absum += abs(dE)
             for c in range(5):
@@ -584,7 +644,7 @@ class LocalEnergy:
                  b_ptr=np.zeros(n + 1, np.int64), b_list=z,
                  has_bend=False, a_i=z, a_j=z, a_k=z, kappa=0.0,
                  a_ptr=np.zeros(n + 1, np.int64), a_list=z,
-                 has_wca=False, w_on=np.zeros(n, np.uint8), eps=0.0, sig2=1.0, rc2=0.0,
+                 has_wca=False, w_on=np.zeros(n, np.uint8), eps=0.0, sig2=1.0, rc=0.0, rc2=0.0,
                  cell=1.0, e_ptr=np.zeros(n + 1, np.int64), e_list=z,
                  has_wall=False, wall_on=np.zeros(n, np.uint8), wall_k=0.0, wall_z=0.0,
                  has_pull=False, share=np.zeros(n), pull_f=0.0)
@@ -662,7 +722,7 @@ class LocalEnergy:
         ptr = np.zeros(n + 1, np.int64)
         np.add.at(ptr, both[:, 0] + 1, 1)
         p.update(has_wca=True, w_on=on, eps=_global(f, f"{name}_eps") / PN_NM_IN_KJ_MOL,
-                 sig2=sigma * sigma, rc2=rc * rc, cell=rc, e_ptr=np.cumsum(ptr),
+                 sig2=sigma * sigma, rc=rc, rc2=rc * rc, cell=CELL_FACTOR * rc, e_ptr=np.cumsum(ptr),
                  e_list=both[:, 1].copy())
 
     def _pos(self, pos) -> np.ndarray:

@@ -63,11 +63,8 @@ import numpy as np
 
 from .. import forcefield
 from ..chains import (
-    MIN_PASSAGE_BARRIER_KT,
     ChainKit,
     Model,
-    max_bead_spacing_nm,
-    passage_barrier_kT,
 )
 from ..forces.chiral import default_exclusion
 from ..forces.reference_chiral import chiral_energy_forces, default_subdivisions
@@ -75,7 +72,7 @@ from ..geometry.curves import crossing_angles, gauss_linking_number, writhe
 from ..geometry.ribbon import ring_twist
 from ..observables import Column, Observable
 from ..run.driver import MAX_REPLICAS
-from ..run.engine import INTEGRATORS, MAX_SEED
+from ..run.engine import MAX_SEED
 from ..run.moves import RigidMoves
 from ..run.states import Schedule
 from ..units import TWO_PI
@@ -372,33 +369,12 @@ class Catenane(ThermalScene):
         need(self.stretch in ("bonds", "constraints"), "stretch",
              "allowed: 'bonds', 'constraints'")
         need(self.stretch_modulus_pN > 0, "stretch_modulus_pN", "must be > 0")
-        need(self.report_interval >= 1, "report_interval", "must be >= 1")
-        need(self.steps >= self.report_interval, "steps",
-             f"must be >= report_interval={self.report_interval}")
-        need(self.equilibration_steps >= 0, "equilibration_steps", "must be >= 0")
-        need(self.frame_interval >= self.report_interval
-             and self.frame_interval % self.report_interval == 0, "frame_interval",
-             f"must be a multiple of report_interval={self.report_interval}")
-        need(0 <= self.seed <= MAX_SEED // MAX_REPLICAS, "seed",
-             f"must be in [0, {MAX_SEED // MAX_REPLICAS}]")
-        need(1 <= self.replicas <= MAX_REPLICAS, "replicas", f"must be in [1, {MAX_REPLICAS}]")
-        need(0 <= self.pack <= MAX_REPLICAS, "pack", f"must be in [0, {MAX_REPLICAS}] (0 = auto)")
-        need(self.workers >= 0, "workers", "must be >= 0 (0 = one per usable core)")
-        need(0 < self.timestep_safety <= 0.9, "timestep_safety", "must be in (0, 0.9]")
-        need(self.integrator in INTEGRATORS, "integrator", f"allowed: {', '.join(INTEGRATORS)}")
+        self.check_run_keys()
         d = self.effective_diameter_nm
         R = self.length_nm / TWO_PI
         need(R > 2.0 * d, "length_nm", f"a ring of radius {R:.2f} nm cannot hold a linked ring "
              f"of diameter {d:.2f} nm (need L > 4 pi Delta = {4 * math.pi * d:.1f} nm)")
-        k_kT = (self.stretch_modulus_pN / self.bead_spacing_nm / self.kT
-                if self.stretch == "bonds" else None)
-        barrier = passage_barrier_kT(self.bead_spacing_nm, d, k_kT)
-        s_kT = None if k_kT is None else self.stretch_modulus_pN / self.kT
-        need(barrier >= MIN_PASSAGE_BARRIER_KT, "bead_spacing_nm",
-             f"too coarse for the effective DNA diameter {d:.2f} nm at {self.salt_mM} mM: the "
-             f"rings could pass through each other (barrier {barrier:.1f} kT < "
-             f"{MIN_PASSAGE_BARRIER_KT} kT). Use bead_spacing_nm <= "
-             f"{max_bead_spacing_nm(d, s_kT):.2f}")
+        self.check_passage_barrier()
 
     # -- build ---------------------------------------------------------------------------
     def build(self) -> Model:

@@ -14,10 +14,12 @@ from __future__ import annotations
 import dataclasses
 from typing import ClassVar
 
+from ..chains import MIN_PASSAGE_BARRIER_KT, max_bead_spacing_nm, passage_barrier_kT
 from ..run import driver
 from ..run import summary as run_summary
 from ..run.contract import StartError, ThermalContract
 from ..run.driver import MAX_REPLICAS
+from ..run.engine import INTEGRATORS, MAX_SEED
 from .base import DNAQuantities, Scene
 
 __all__ = ["ThermalScene"]
@@ -28,6 +30,44 @@ class ThermalScene(DNAQuantities, Scene, ThermalContract):
 
     #: Width and format of the state columns in the printed table.
     state_widths: ClassVar[dict] = {}
+
+    # -- checks --------------------------------------------------------------------------
+    def check_run_keys(self) -> None:
+        """The keys every thermal run has: sampling intervals, seed, replicas, packing,
+        workers, time-step safety and integrator."""
+        need = self.need
+        need(self.report_interval >= 1, "report_interval", "must be >= 1")
+        need(self.steps >= self.report_interval, "steps",
+             f"must be >= report_interval={self.report_interval}")
+        need(self.equilibration_steps >= 0, "equilibration_steps", "must be >= 0")
+        need(self.frame_interval >= self.report_interval
+             and self.frame_interval % self.report_interval == 0, "frame_interval",
+             f"must be a multiple of report_interval={self.report_interval}")
+        need(0 <= self.seed <= MAX_SEED // MAX_REPLICAS, "seed",
+             f"must be in [0, {MAX_SEED // MAX_REPLICAS}] (replica r runs seed x "
+             f"{MAX_REPLICAS} + r)")
+        need(1 <= self.replicas <= MAX_REPLICAS, "replicas", f"must be in [1, {MAX_REPLICAS}]")
+        need(0 <= self.pack <= MAX_REPLICAS, "pack", f"must be in [0, {MAX_REPLICAS}] (0 = auto)")
+        need(self.workers >= 0, "workers", "must be >= 0 (0 = one per usable core)")
+        need(0 < self.timestep_safety <= 0.9, "timestep_safety", "must be in (0, 0.9]")
+        need(self.integrator in INTEGRATORS, "integrator", f"allowed: {', '.join(INTEGRATORS)}")
+
+    def check_passage_barrier(self) -> None:
+        """DNA must not pass through DNA: the excluded-volume barrier of two crossing bonds
+        (bond stretch included, :func:`dnabraid.chains.passage_barrier_kT`) must be at least
+        MIN_PASSAGE_BARRIER_KT, else the bead spacing is refused with the largest allowed."""
+        d = self.effective_diameter_nm
+        k_kT = (self.stretch_modulus_pN / self.bead_spacing_nm / self.kT
+                if self.stretch == "bonds" else None)
+        barrier = passage_barrier_kT(self.bead_spacing_nm, d, k_kT)
+        if barrier >= MIN_PASSAGE_BARRIER_KT:
+            return
+        s_kT = None if k_kT is None else self.stretch_modulus_pN / self.kT
+        self.need(False, "bead_spacing_nm",
+                  f"too coarse for the effective DNA diameter {d:.2f} nm at {self.salt_mM} mM "
+                  f"salt: DNA could pass through DNA (barrier {barrier:.1f} kT < "
+                  f"{MIN_PASSAGE_BARRIER_KT} kT, bond stretch included). Use bead_spacing_nm "
+                  f"<= {max_bead_spacing_nm(d, s_kT):.2f}")
 
     # -- run -----------------------------------------------------------------------------
     def run(self, out: str, *, platform: str = "CPU", threads: int | None = None,

@@ -16,14 +16,11 @@ from typing import ClassVar
 
 from .. import forcefield
 from ..chains import (
-    MIN_PASSAGE_BARRIER_KT,
     ChainKit,
     Model,
-    max_bead_spacing_nm,
-    passage_barrier_kT,
 )
 from ..run.driver import MAX_REPLICAS
-from ..run.engine import INTEGRATORS, MAX_SEED
+from ..run.engine import MAX_SEED
 from ..run.states import TurnSchedule
 from .base import key, resolve_salt_alpha
 from .thermal import ThermalScene
@@ -137,13 +134,6 @@ class TweezerScene(ThermalScene):
         need(self.persistence_nm >= self.bead_spacing_nm, "persistence_nm",
              "must be >= bead_spacing_nm (a bead chain cannot resolve a shorter persistence)")
         need(150 <= self.temperature_K <= 400, "temperature_K", "must be between 150 and 400 K")
-        need(self.report_interval >= 1, "report_interval", "must be >= 1")
-        need(self.steps >= self.report_interval, "steps",
-             f"must be >= report_interval={self.report_interval}")
-        need(self.equilibration_steps >= 0, "equilibration_steps", "must be >= 0")
-        need(self.frame_interval >= self.report_interval
-             and self.frame_interval % self.report_interval == 0, "frame_interval",
-             f"must be a multiple of report_interval={self.report_interval}")
         need(self.diameter_nm >= 0, "diameter_nm", "must be >= 0 (0 = from salt)")
         need(self.stretch_modulus_pN > 10 * self.force_pN, "stretch_modulus_pN",
              "must be much larger than the force (> 10 x force_pN)")
@@ -151,41 +141,18 @@ class TweezerScene(ThermalScene):
              "allowed: 'bonds', 'constraints'")
         need(self.bead_radius_nm > 0, "bead_radius_nm", "must be > 0")
         need(0 < self.bead_friction_factor <= 1, "bead_friction_factor", "must be in (0, 1]")
-        need(0 < self.timestep_safety <= 0.9, "timestep_safety", "must be in (0, 0.9]")
-        need(0 <= self.seed <= MAX_SEED // MAX_REPLICAS, "seed",
-             f"must be in [0, {MAX_SEED // MAX_REPLICAS}] (replica r runs seed x "
-             f"{MAX_REPLICAS} + r)")
-        need(1 <= self.replicas <= MAX_REPLICAS, "replicas", f"must be in [1, {MAX_REPLICAS}]")
         need(self.protocol in ("independent", "ramp"), "protocol",
              "allowed: 'independent', 'ramp'")
-        need(self.workers >= 0, "workers", "must be >= 0 (0 = one per usable core)")
         need(self.target_sem_nm >= 0, "target_sem_nm", "must be >= 0 (0 = no target)")
         need(self.target_sem_pN_nm >= 0, "target_sem_pN_nm", "must be >= 0 (0 = no target)")
         need(self.replicas <= self.max_replicas <= MAX_REPLICAS, "max_replicas",
              f"must be in [replicas={self.replicas}, {MAX_REPLICAS}]")
-        need(0 <= self.pack <= MAX_REPLICAS, "pack", f"must be in [0, {MAX_REPLICAS}] (0 = auto)")
-        need(self.integrator in INTEGRATORS, "integrator", f"allowed: {', '.join(INTEGRATORS)}")
         need(abs(self.alpha) <= 50.0, "alpha",
              "|alpha| must be <= 50 pN (~12 kT/nm; literature estimates are 0.01-1.5 pN, "
              "forcefields/chiral.toml)")
+        self.check_run_keys()
         if self.needs_passage_barrier or self.length_nm > 3 * self.persistence_nm:
             self.check_passage_barrier()
-
-    def check_passage_barrier(self) -> None:
-        """Strands must not pass through each other (the barrier includes bond stretch)."""
-        d = self.effective_diameter_nm
-        k_kT = None
-        if self.stretch == "bonds":
-            k_kT = self.stretch_modulus_pN / self.bead_spacing_nm / self.kT
-        barrier = passage_barrier_kT(self.bead_spacing_nm, d, k_kT)
-        if barrier >= MIN_PASSAGE_BARRIER_KT:
-            return
-        s_kT = None if k_kT is None else self.stretch_modulus_pN / self.kT
-        self.need(False, "bead_spacing_nm",
-                  f"too coarse for the effective DNA diameter {d:.2f} nm at {self.salt_mM} mM "
-                  f"salt: strands could pass through each other (barrier {barrier:.1f} kT < "
-                  f"{MIN_PASSAGE_BARRIER_KT} kT, bond stretch included). Use bead_spacing_nm "
-                  f"<= {max_bead_spacing_nm(d, s_kT):.2f}")
 
     # -- build ---------------------------------------------------------------------------
     def build(self) -> Model:
