@@ -177,10 +177,11 @@ def _wca_pair(r2, P):
 
 
 @numba.njit(cache=True)
-def _wca_site(P, H, pos, moved, p, x, y, z, qmin, stop):
+def _wca_site(P, H, pos, moved, p, x, y, z, qmin, stop, of_moved=False):
     """WCA energy (pN nm) and number of pairs within r_c of particle p placed at
-    (x, y, z) with every unmoved, switched-on, non-excluded particle q > qmin in the table;
-    the sum stops early once it exceeds ``stop`` (pair energies are >= 0)."""
+    (x, y, z) with every switched-on, non-excluded particle q > qmin in the table that is
+    unmoved (``of_moved`` False) or moved (True); the sum stops early once it exceeds
+    ``stop`` (pair energies are >= 0)."""
     rc = P.rc
     inv = H.inv_cell
     xlo, ylo, zlo = _cells(x - rc, y - rc, z - rc, inv)
@@ -193,7 +194,7 @@ def _wca_site(P, H, pos, moved, p, x, y, z, qmin, stop):
                 k = _key(cx, cy, cz)
                 q = H.head[_bucket(cx, cy, cz, H.mask)]
                 while q >= 0:
-                    if H.key[q] == k and q > qmin and q != p and moved[q] == 0:
+                    if H.key[q] == k and q > qmin and q != p and (moved[q] > 0) == of_moved:
                         ddx = pos[q, 0] - x
                         ddy = pos[q, 1] - y
                         ddz = pos[q, 2] - z
@@ -291,7 +292,7 @@ def _total(pos, P, out):
 
 
 @numba.njit(cache=True)
-def _delta(pos, idx, new, moved, rigid, P, H, out, thr, ncon, dcon):
+def _delta(pos, idx, new, moved, rigid, P, H, out, thr, ncon, dcon, flip, rinv, center):
     """Energy change (pN nm) when particles ``idx`` move to ``new``; per term into ``out``.
 
     ``moved[p]`` must hold the slot + 1 of every moved particle (0 for the others) and
@@ -302,6 +303,11 @@ def _delta(pos, idx, new, moved, rigid, P, H, out, thr, ncon, dcon):
     number goes to ``dcon[0]``. The WCA search of the new positions stops, and the
     function returns +inf, as soon as the change is known to exceed ``thr`` (a Metropolis
     test that will reject; WCA pair energies are >= 0, so partial sums only grow).
+
+    ``flip`` (rigid moves only): the moved set was turned by R about ``center``, and the
+    moved-unmoved pairs are searched from the unmoved side instead (cheaper when it is the
+    smaller set): |R (p - c) - (q - c)| = |(p - c) - R^T (q - c)|, so the new pairs are the
+    moved particles' old positions against the unmoved ones turned back by ``rinv`` = R^T.
     """
     for t in range(5):
         out[t] = 0.0
@@ -375,25 +381,56 @@ def _delta(pos, idx, new, moved, rigid, P, H, out, thr, ncon, dcon):
                         dcon[0] -= 1
         # moved against unmoved: the old pairs first (none when nothing interacts) ...
         if ncon > 0:
+            if flip:
+                for q in range(P.n):
+                    if P.w_on[q] and moved[q] == 0:
+                        e, c = _wca_site(P, H, pos, moved, q, pos[q, 0], pos[q, 1],
+                                         pos[q, 2], -1, np.inf, True)
+                        out[2] -= e
+                        dcon[0] -= c
+            else:
+                for a in range(m):
+                    p = idx[a]
+                    if P.w_on[p]:
+                        e, c = _wca_site(P, H, pos, moved, p, pos[p, 0], pos[p, 1],
+                                         pos[p, 2], -1, np.inf)
+                        out[2] -= e
+                        dcon[0] -= c
+        # ... then the new ones, stopping once the move is sure to be rejected
+        rest = out[0] + out[1] + out[3] + out[4] + out[2]
+        if rest > thr:
+            return np.inf
+        if flip:
+            for q in range(P.n):
+                if P.w_on[q] and moved[q] == 0:
+                    x = pos[q, 0] - center[0]
+                    y = pos[q, 1] - center[1]
+                    z = pos[q, 2] - center[2]
+                    e, c = _wca_site(P, H, pos, moved, q,
+                                     rinv[0, 0] * x + rinv[0, 1] * y + rinv[0, 2] * z
+                                     + center[0],
+                                     rinv[1, 0] * x + rinv[1, 1] * y + rinv[1, 2] * z
+                                     + center[1],
+                                     rinv[2, 0] * x + rinv[2, 1] * y + rinv[2, 2] * z
+                                     + center[2], -1, thr - rest, True)
+                    out[2] += e
+                    rest += e
+                    dcon[0] += c
+                    if rest > thr:
+                        return np.inf
+        else:
             for a in range(m):
                 p = idx[a]
                 if P.w_on[p]:
-                    e, c = _wca_site(P, H, pos, moved, p, pos[p, 0], pos[p, 1], pos[p, 2],
-                                     -1, np.inf)
-                    out[2] -= e
-                    dcon[0] -= c
-        # ... then the new ones, stopping once the move is sure to be rejected
-        rest = out[0] + out[1] + out[3] + out[4] + out[2]
-        for a in range(m):
-            p = idx[a]
-            if P.w_on[p]:
-                e, c = _wca_site(P, H, pos, moved, p, new[a, 0], new[a, 1], new[a, 2], -1,
-                                 thr - rest)
-                out[2] += e
-                rest += e
-                dcon[0] += c
-                if rest > thr:
-                    return np.inf
+                    e, c = _wca_site(P, H, pos, moved, p, new[a, 0], new[a, 1], new[a, 2],
+                                     -1, thr - rest)
+                    out[2] += e
+                    rest += e
+                    dcon[0] += c
+                    if rest > thr:
+                        return np.inf
+    elif out[0] + out[1] + out[3] + out[4] > thr:
+        return np.inf
     return out[0] + out[1] + out[2] + out[3] + out[4]
 
 
@@ -408,7 +445,8 @@ def _delta_once(pos, idx, new, P, out):
     else:
         H = _hash_build(pos[:0], P.w_on[:0], 1.0)
     dcon = np.zeros(1, np.int64)
-    return _delta(pos, idx, new, moved, False, P, H, out, np.inf, 1, dcon)
+    return _delta(pos, idx, new, moved, False, P, H, out, np.inf, 1, dcon, False,
+                  np.eye(3), np.zeros(3))
 
 
 # ------------------------------------------------------------------------ Monte Carlo
@@ -487,6 +525,13 @@ def run_chain_moves(pos, P, c_ptr, c_beads, c_fixed, mobile, cum, crank_max, cra
     else:
         H = _hash_build(pos[:0], P.w_on[:0], 1.0)
     ncon = _wca_all(pos, P, H)[1] if P.has_wca else 0
+    n_on = 0
+    if P.has_wca:
+        for p in range(n):
+            if P.w_on[p]:
+                n_on += 1
+    rinv = np.eye(3)
+    center = np.zeros(3)
     dcon = np.zeros(1, np.int64)
     moved = np.zeros(n, np.int64)
     idx = np.empty(n, np.int64)
@@ -497,6 +542,7 @@ def run_chain_moves(pos, P, c_ptr, c_beads, c_fixed, mobile, cum, crank_max, cra
         r = uni[t, 0]
         kind = 0 if r < cum[0] else (1 if r < cum[1] else 2)
         stats[kind, 0] += 1
+        flip = False
         ch = min(int(uni[t, 1] * nch), nch - 1)
         s = c_ptr[ch]
         nb = c_ptr[ch + 1] - s
@@ -539,14 +585,24 @@ def run_chain_moves(pos, P, c_ptr, c_beads, c_fixed, mobile, cum, crank_max, cra
             if c_fixed[s + nb] - c_fixed[s + i] > 0 or nrm == 0.0:
                 stats[kind, 1] += 1
                 continue
-            R = _rotation(gx / nrm, gy / nrm, gz / nrm, pivot_angle * (2.0 * uni[t, 4] - 1.0))
+            theta = pivot_angle * (2.0 * uni[t, 4] - 1.0)
+            R = _rotation(gx / nrm, gy / nrm, gz / nrm, theta)
             pc = c_beads[s + i - 1]
+            m_on = 0
             for k in range(i, nb):
                 p = c_beads[s + k]
                 _rotate_into(pos, R, pos[pc, 0], pos[pc, 1], pos[pc, 2], p, new, m)
                 idx[m] = p
                 m += 1
                 moved[p] = m
+                if P.has_wca and P.w_on[p]:
+                    m_on += 1
+            if n_on - m_on < m_on:
+                # fewer unmoved than moved particles: search the pairs from their side
+                flip = True
+                rinv = _rotation(gx / nrm, gy / nrm, gz / nrm, -theta)  # R^T, bitwise
+                for c in range(3):
+                    center[c] = pos[pc, c]
         else:
             # one bead displaced uniformly in a ball
             gx = gau[t, 0]
@@ -566,7 +622,8 @@ def run_chain_moves(pos, P, c_ptr, c_beads, c_fixed, mobile, cum, crank_max, cra
             moved[p] = 1
         # Metropolis: accept when dE <= 0 or u < exp(-dE / kT), i.e. dE < -kT ln u
         thr = -kT * math.log(uni[t, 5]) if uni[t, 5] > 0.0 else np.inf
-        dE = _delta(pos, idx[:m], new[:m], moved, kind < 2, P, H, dterm, thr, ncon, dcon)
+        dE = _delta(pos, idx[:m], new[:m], moved, kind < 2, P, H, dterm, thr, ncon, dcon,
+                    flip, rinv, center)
         if math.isfinite(dE) and (dE <= 0.0 or dE < thr):
             ncon += dcon[0]
             stats[kind, 2] += 1
@@ -616,10 +673,11 @@ class LocalEnergy:
 
     Parameters
     ----------
-    model : dnabraid.chains.Model
-        A built model whose System holds only the terms of :data:`TERMS` (any subset,
-        named as the chain kit names them). Parameters are the Forces' default values
-        (a protocol that changes a global parameter in the Context is not seen).
+    model : dnabraid.chains.Model or openmm.System
+        A built model (or its System) whose System holds only the terms of :data:`TERMS`
+        (any subset, named as the chain kit names them). Parameters are the Forces'
+        default values (a protocol that changes a global parameter in the Context is not
+        seen).
 
     Attributes
     ----------
@@ -627,6 +685,8 @@ class LocalEnergy:
         The terms present, a subset of :data:`TERMS`.
     n : int
         Particles.
+    n_constraints : int
+        Rigid bonds of the System (moves that change a bond length would break them).
 
     Raises
     ------
@@ -635,9 +695,10 @@ class LocalEnergy:
     """
 
     def __init__(self, model):
-        system = model.system
+        system = model if isinstance(model, openmm.System) else model.system
         n = system.getNumParticles()
         self.n = n
+        self.n_constraints = system.getNumConstraints()
         z = np.zeros(0, np.int64)
         fz = np.zeros(0)
         p = dict(n=n, has_bond=False, b_i=z, b_j=z, b_k=fz, b_r0=fz,

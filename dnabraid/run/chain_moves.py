@@ -73,8 +73,10 @@ class ChainMoves:
 
     Parameters
     ----------
-    energy : dnabraid.kernels.LocalEnergy
-        The model's energy (every term of its System).
+    energy : dnabraid.kernels.LocalEnergy, dnabraid.chains.Model or openmm.System
+        The model's energy (every term of its System); a Model or System is turned into
+        its :class:`~dnabraid.kernels.LocalEnergy` at the first call, so that it sees
+        every Force added after the moves were made (a scene makes them while it builds).
     chains : list of int arrays
         Open chains, bead indices in chain order (surface -> attachment).
     fixed : iterable of int
@@ -122,7 +124,7 @@ class ChainMoves:
             raise ValueError("no move kind has both a weight and an amplitude")
         if guard_every < 0:
             raise ValueError("guard_every must be >= 0")
-        self.energy = energy
+        self._energy = energy
         self.kT = float(kT_pN_nm)
         self.moves_per_call = int(moves_per_call)
         self.crank_angle, self.pivot_angle, self.bead_nm = amps
@@ -152,12 +154,20 @@ class ChainMoves:
         self.guard_checks = 0
         self.guard_max_diff = 0.0
 
+    @property
+    def energy(self) -> LocalEnergy:
+        """The :class:`~dnabraid.kernels.LocalEnergy` of the moves (built on first use)."""
+        if not isinstance(self._energy, LocalEnergy):
+            self._energy = LocalEnergy(self._energy)
+        if self.bead_nm > 0 and self._energy.n_constraints:
+            raise ValueError("ChainMoves: bead moves would break the System's rigid bonds "
+                             "(constraints); set bead_move_nm = 0")
+        return self._energy
+
     @classmethod
     def for_model(cls, model, **kw) -> ChainMoves:
         """Moves of ``model.chains`` (immobile ``model.fixed``) at the model's kT, with the
         model's :class:`~dnabraid.kernels.LocalEnergy`; keywords as the constructor's."""
-        if model.system.getNumConstraints() and kw.get("bead_move_nm", 0.0) > 0:
-            raise ValueError("bead moves would break the model's rigid bonds (constraints)")
         return cls(LocalEnergy(model), model.chains, model.fixed, model.dna.kT, **kw)
 
     def restart(self, stream: int) -> None:

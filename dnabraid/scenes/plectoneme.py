@@ -28,9 +28,8 @@ from ..forces.twist_frames import (
     twist_bead_force,
     twist_force,
 )
-from ..geometry import random_tether
 from ..geometry.ribbon import writhe_open
-from .base import key
+from .base import SceneError, key
 from .tweezer_base import TurnedScene
 
 #: Frame arm a (side particle distance from the axis) in units of the bead spacing.
@@ -77,12 +76,8 @@ class Plectoneme(TurnedScene):
         kT, b, n = d.kT, self.bead_spacing_nm, self.n_beads
         zeta_phys = units.stokes_friction(self.bead_radius_nm)
         zeta_attach = max(d.zeta_bead, self.bead_friction_factor * zeta_phys)
-        pos = random_tether(n, b, d.kappa_kT, self.seed,
-                            z_min=0.5 * d.diameter_nm if self.surface else None)
-        # Lk = 0 at the start: the bead clamp takes up -Wr of the random start, which must
-        # stay on the principal branch of the clamp angle (|2 pi Wr| < pi/2)
-        if abs(writhe_open(pos)) > 0.25:
-            pos = np.c_[np.zeros(n), np.zeros(n), b * np.arange(n)]
+        pos = self.equilibrium_start(d)
+        kit.exact_start = True  # a thermal draw: minimising would straighten it
         c0 = kit.add_chain(pos, "A", last_friction=zeta_attach)
         zeta_frame = FRAME_FRICTION_FRACTION * d.zeta_bead
         arm = FRAME_ARM_FRACTION * b
@@ -137,6 +132,29 @@ class Plectoneme(TurnedScene):
                 "frame_arm_nm": arm, "frame_k_pN_per_nm": k_frame,
                 "zeta_frame_pN_ns_per_nm": zeta_frame, "bead_arm_nm": BEAD_ARM_NM,
                 "zeta_bead_orientation_pN_ns_per_nm": d.zeta_bead}
+
+    def equilibrium_start(self, d) -> np.ndarray:
+        """The replica's own start: an exact draw of the discrete WLC under the force
+        (:func:`dnabraid.continuum.wlc.sample_tether_start`; bending and stretch exact, the
+        untwisted frames added on it), conditioned by rejection on the wall, on no two
+        non-neighbouring beads closer than 0.8 d, and on |Wr| <= 0.25 (Lk = 0 at the start:
+        the bead clamp takes up -Wr, which must stay on the principal branch of the clamp
+        angle, |2 pi Wr| < pi/2). A start that cannot be drawn is an error, never a shared
+        straight rod (as before 2026-12-02)."""
+        from ..continuum.wlc import StartDrawError, sample_tether_start
+
+        gap = max(1, int(np.ceil(2 ** (1 / 6) * d.diameter_nm / self.bead_spacing_nm + 0.5)))
+        k = self.stretch_modulus_pN / self.bead_spacing_nm if self.stretch == "bonds" else None
+        try:
+            return sample_tether_start(
+                self.force_pN, self.n_beads - 1, self.bead_spacing_nm, d.kappa_kT, d.kT,
+                np.random.default_rng([int(self.seed), 0x9E7]), stretch_k_pN_per_nm=k,
+                wall_z_nm=0.5 * d.diameter_nm if self.surface else None,
+                min_separation_nm=0.8 * d.diameter_nm, min_chemical_gap=gap,
+                accept=lambda x: abs(writhe_open(x)) <= 0.25, tries=256)
+        except StartDrawError as exc:
+            raise SceneError(f"force_pN={self.force_pN} pN: {exc}; a plectoneme start needs "
+                             "a chain that fits above the wall with |Wr| <= 0.25") from exc
 
     def observables(self, model) -> list:
         c = model.chains[0]

@@ -6,11 +6,19 @@ bead's friction and the force. It starts from an exact equilibrium draw of the d
 (:meth:`Tether.equilibrium_start`), not minimised.
 ``self_avoidance = false`` and ``surface = false`` leave out the excluded volume and the wall:
 the exact discrete WLC under force (:mod:`dnabraid.continuum.wlc`) is then the same model.
+
+Brownian dynamics relaxes the chain's slowest mode in a time ~ zeta L^2 / (pi^2 F), too
+slow for long tethers at low force; ``mc_moves`` Metropolis crankshaft, pivot and bead
+moves after every report interval (:class:`dnabraid.run.chain_moves.ChainMoves`, local
+energies from numba kernels, :mod:`dnabraid.kernels`) sample the same Boltzmann
+distribution in far fewer steps (workflows/results/benchmark_chain_moves.txt). The moves'
+time correlations are not physical: ``mc_moves = 0`` for kinetics.
 """
 
 from __future__ import annotations
 
 import dataclasses
+import math
 from typing import ClassVar
 
 import numpy as np
@@ -20,8 +28,20 @@ from .. import observables as ob
 from .. import units
 from ..forces import pull_force
 from ..geometry import random_tether
+from ..run.chain_moves import ChainMoves
 from .base import key
 from .tweezer_base import TweezerScene
+
+#: Default Metropolis move attempts per report interval (workflows/benchmark_chain_moves.py).
+MC_MOVES = 500
+MC_MOVES_HELP = ("Metropolis moves after every report interval (crankshaft, pivot, bead; "
+                 "dnabraid.run.chain_moves): equilibrium sampling far faster than Brownian "
+                 "dynamics alone; 0 = Brownian dynamics alone (physical kinetics)")
+CRANK_HELP = ("largest crankshaft angle: an arc of 1-8 beads turned about the line through "
+              "its neighbours")
+PIVOT_HELP = ("largest pivot angle: the chain's end beyond a bead turned about it, random "
+              "axis")
+BEAD_HELP = "radius of the ball of a single-bead displacement (samples bond lengths)"
 
 
 @dataclasses.dataclass(frozen=True)
@@ -35,11 +55,29 @@ class Tether(TweezerScene):
     turns: tuple = key((0.0,), "turns", "a nicked tether holds no turns: [0]")
     self_avoidance: bool = key(True, "", "false: no excluded volume between DNA beads (the "
                                "exact discrete WLC's model, for calibration)")
+    mc_moves: int = key(MC_MOVES, "", MC_MOVES_HELP)
+    crank_angle_rad: float = key(1.5, "rad", CRANK_HELP)
+    pivot_angle_rad: float = key(0.6, "rad", PIVOT_HELP)
+    bead_move_nm: float = key(0.3, "nm", BEAD_HELP)
 
     def validate(self) -> None:
         super().validate()
-        self.need(self.turns == (0.0,), "turns",
-                  "a nicked single tether cannot hold turns; use turns=[0]")
+        need = self.need
+        need(self.turns == (0.0,), "turns",
+             "a nicked single tether cannot hold turns; use turns=[0]")
+        need(self.mc_moves >= 0, "mc_moves", "must be >= 0 (0 = Brownian dynamics alone)")
+        need(0 <= self.crank_angle_rad <= math.pi, "crank_angle_rad", "must be in [0, pi]")
+        need(0 <= self.pivot_angle_rad <= math.pi, "pivot_angle_rad", "must be in [0, pi]")
+        need(self.bead_move_nm >= 0, "bead_move_nm", "must be >= 0")
+        if self.mc_moves > 0:
+            need(self.crank_angle_rad > 0 or self.pivot_angle_rad > 0
+                 or self.bead_move_nm > 0, "mc_moves",
+                 "needs a move: crank_angle_rad, pivot_angle_rad or bead_move_nm > 0")
+            need(self.stretch == "bonds", "mc_moves",
+                 "the Metropolis moves need stretch='bonds' (bead moves change bond "
+                 "lengths); set mc_moves=0 for rigid bonds")
+            need(self.alpha == 0.0, "mc_moves",
+                 "the moves' local energies have no chiral term; set alpha=0 or mc_moves=0")
 
     def attach(self, kit) -> dict:
         d = kit.dna
@@ -62,6 +100,13 @@ class Tether(TweezerScene):
         kit.bound("stretch", "bend", "wca", "chiral")
         kit.bound("wall", "stretch")
         kit.attachments = [att]
+        if self.mc_moves > 0:
+            # the LocalEnergy is built from the finished System at the first call
+            kit.moves = ChainMoves(kit.system, [chain], kit.fixed, d.kT,
+                                   moves_per_call=self.mc_moves,
+                                   crank_angle_rad=self.crank_angle_rad,
+                                   pivot_angle_rad=self.pivot_angle_rad,
+                                   bead_move_nm=self.bead_move_nm, seed=self.seed)
         return {"zeta_attach_pN_ns_per_nm": zeta_attach,
                 "zeta_center_pN_ns_per_nm": zeta_attach,
                 "zeta_bead_physical_pN_ns_per_nm": zeta_phys,
