@@ -238,6 +238,23 @@ def test_scene_keys_and_refusals():
         scn.make_scene("closed", {"spacing_over_radius": 0.01})
 
 
+
+def test_default_spacing_keeps_the_pentafoil_in_contact():
+    """The scene's default b/h (0.25) keeps the pentafoil (5, 2) in contact along the whole
+    ring (p_min > 0; measured 296 B/L^3, about 1 s): at b/h = 0.5 the smoothed pressure
+    vanished along 2.5 % of it (p_min = 0, bead-scale). The means are converged there (eta,
+    p_mean, kappa_c within 0.05 % of b/h = 0.125; workflows/results/closed_spacing.md)."""
+    s = scn.make_scene("closed", {"topology": "knot", "n": 5})
+    assert s.spacing_over_radius == 0.25
+    r = C.solve(s.braid())
+    assert r["converged"]
+    assert r["contact_lost_fraction"] == 0.0
+    assert r["pressure_min"] > 0.3 * r["pressure_mean"]       # measured 296 / 472
+    # converged means against b/h = 0.125 (closed_spacing.md: 0.31610, 471.9, 6.3683)
+    assert r["eta_mean"] == pytest.approx(0.31610, rel=1e-3)
+    assert r["pressure_mean"] == pytest.approx(471.9, rel=0.01)
+    assert r["contact_curvature_mean"] == pytest.approx(6.3683, rel=0.01)
+
 def test_uniform_ply_formulas():
     # sin theta = pi n Delta / L; p = B sin^4 / r^3 against the continuum module's Eq. (2)
     from dnabraid.continuum import closed_ply as cc

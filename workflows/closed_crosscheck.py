@@ -235,7 +235,13 @@ def _finest(rows, cases):
 
 
 def _inside(v, lo, hi):
-    return "inside" if lo <= v <= hi else f"outside ({100 * (v - (lo if v < lo else hi)) / (lo if v < lo else hi):+.1f} % from the nearer end)"
+    """Where ``v`` lies against the slide's axis tick labels ``lo`` ... ``hi`` (the curves
+    run a little beyond the labels, so the labels are not a band)."""
+    if lo <= v <= hi:
+        return "between the slide's axis labels"
+    end = lo if v < lo else hi
+    side = "below the lowest" if v < lo else "above the highest"
+    return f"{abs(100 * (v - end) / end):.1f} % {side} axis label"
 
 
 def verdict(rows) -> list:

@@ -30,9 +30,10 @@ from .base import Scene, SceneError, key
 #: Largest total bead count (each Newton iteration factorises a 3N x 3N sparse matrix).
 MAX_CLOSED_BEADS = 8000
 
-#: The seed's numbers (van der Heijden, "Equilibrium theory of elastic braids", seed 000),
-#: the extreme axis labels of the seed's plots (assumed to frame the curves) at Delta/L = 0.02 (left-handed, Lk = -n): slide 21 (4-link) and
-#: slide 23 (pentafoil; p on the ring [0, L + L2], kappa_c on [0, L]).
+#: The seed's numbers (van der Heijden, "Equilibrium theory of elastic braids", seed 000):
+#: the extreme tick labels of the seed's plot axes (the curves span a little beyond them, so
+#: they are not the data's extremes) at Delta/L = 0.02 (left-handed, Lk = -n): slide 21
+#: (4-link) and slide 23 (pentafoil; p on the ring [0, L + L2], kappa_c on [0, L]).
 SEED_VALUES = {
     ("link", 4): {"eta": (0.50910, 0.50935), "pressure": (3200.0, 3900.0),
                   "source": "seed 000, slide 21 (4-link, Delta/L = 0.02)"},
@@ -59,8 +60,10 @@ class Closed(Scene):
     diameter_nm: float = key(2.0, "nm", "contact diameter Delta (sets the scale only)")
     bending_stiffness_pN_nm2: float = key(1000.0, "pN nm^2", "bending stiffness B (scale only: "
                                           "outputs are in B/L^3 and 1/L)")
-    spacing_over_radius: float = key(0.5, "", "bead spacing b / h, h = Delta/2 (0.5, 0.25, "
-                                     "0.125: the convergence table)")
+    spacing_over_radius: float = key(0.25, "", "bead spacing b / h, h = Delta/2. 0.25: eta, "
+                                     "p_mean, kappa_c within 0.05 % of b/h = 0.125 (4-link, "
+                                     "pentafoil) and the pentafoil in contact (p_min 296 B/L^3; "
+                                     "0 at 0.5): workflows/results/closed_spacing.md")
     contact: str = key("segments", "", "'segments' (smooth capsule contact) or 'beads'")
     start_noise: float = key(0.02, "", "smooth random perturbation of the uniform-ply start, "
                              "x Delta (breaks its symmetry)")

@@ -56,7 +56,7 @@ class Tether(TweezerScene):
     self_avoidance: bool = key(True, "", "false: no excluded volume between DNA beads (the "
                                "exact discrete WLC's model, for calibration)")
     mc_moves: int = key(MC_MOVES, "", MC_MOVES_HELP)
-    crank_angle_rad: float = key(1.5, "rad", CRANK_HELP)
+    crank_angle_rad: float = key(2.0, "rad", CRANK_HELP)
     pivot_angle_rad: float = key(0.6, "rad", PIVOT_HELP)
     bead_move_nm: float = key(0.3, "nm", BEAD_HELP)
 
