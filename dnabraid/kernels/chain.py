@@ -58,13 +58,16 @@ import numpy as np
 import openmm
 from openmm import unit as u
 
-from ..forces import bending_force, pull_force, wall_force, wca_force
+from ..forces import (bead_exclusion_force, bending_force, pull_force, trap_force, wall_force,
+                      wca_force)
 from ..units import PN_NM_IN_KJ_MOL
 
 __all__ = ["LocalEnergy", "TERMS", "run_chain_moves"]
 
 #: The terms a :class:`LocalEnergy` knows, in the order of its term arrays.
-TERMS = ("stretch", "bend", "wca", "wall", "pull")
+TERMS = ("stretch", "bend", "wca", "wall", "pull", "link", "trap", "beadwall")
+#: Number of terms (length of every per-term array).
+NTERMS = len(TERMS)
 
 #: Cell coordinates are clamped to +-2^20 cells (5 mm at 5-nm cells) and packed in 21 bits
 #: each; clamping is monotone and 1-Lipschitz, so neighbouring cells stay neighbours.
@@ -79,8 +82,10 @@ CELL_FACTOR = 2.0
 # compiled functions). Index arrays int64, per-particle flags uint8, energies pN nm.
 _Params = namedtuple("_Params", [
     "n",
-    # stretch: bonds (i, j), k (pN/nm), r0 (nm); per-particle CSR of the bonds it is in
-    "has_bond", "b_i", "b_j", "b_k", "b_r0", "b_ptr", "b_list",
+    # bonds (i, j) of stretch, link and beadwall: k (pN/nm), r0 (nm), term index b_t,
+    # one-sided flag b_one (beadwall: energy only for r < r0); per-particle CSR of the
+    # bonds it is in
+    "has_bond", "b_i", "b_j", "b_k", "b_r0", "b_t", "b_one", "b_ptr", "b_list",
     # bend: hinges (i, j, k) and kappa (pN nm); per-particle CSR of the hinges it is in
     "has_bend", "a_i", "a_j", "a_k", "kappa", "a_ptr", "a_list",
     # wca: switch per particle, eps (pN nm), sigma^2, r_c^2 (nm^2), cell size (nm),
@@ -90,6 +95,8 @@ _Params = namedtuple("_Params", [
     "has_wall", "wall_on", "wall_k", "wall_z",
     # pull: share per particle, F (pN)
     "has_pull", "share", "pull_f",
+    # trap: particles (t_i, t_j), K (pN nm), cos and sin of the angle, tilt k (pN/nm)
+    "has_trap", "t_i", "t_j", "trap_K", "trap_c", "trap_s", "trap_kt",
 ])
 
 _Hash = namedtuple("_Hash", ["head", "nxt", "key", "bucket", "inv_cell", "mask"])
@@ -226,12 +233,32 @@ def _at(pos, new, moved, p, c):
 
 
 @numba.njit(cache=True)
-def _bond_e(xi, yi, zi, xj, yj, zj, k, r0):
+def _bond_e(xi, yi, zi, xj, yj, zj, k, r0, one):
     dx = xj - xi
     dy = yj - yi
     dz = zj - zi
     d = math.sqrt(dx * dx + dy * dy + dz * dz) - r0
+    if one and d >= 0.0:  # one-sided (beadwall): step(R - r)
+        return 0.0
     return 0.5 * k * d * d
+
+
+@numba.njit(cache=True)
+def _trap_e(xi, yi, zi, xj, yj, zj, P):
+    dx = xj - xi
+    dy = yj - yi
+    dz = zj - zi
+    return -P.trap_K * (dx * P.trap_c + dy * P.trap_s) / math.sqrt(dx * dx + dy * dy) \
+        + 0.5 * P.trap_kt * dz * dz
+
+
+@numba.njit(cache=True)
+def _trap_at(pos, new, moved, P):
+    i = P.t_i
+    j = P.t_j
+    return _trap_e(_at(pos, new, moved, i, 0), _at(pos, new, moved, i, 1),
+                   _at(pos, new, moved, i, 2), _at(pos, new, moved, j, 0),
+                   _at(pos, new, moved, j, 1), _at(pos, new, moved, j, 2), P)
 
 
 @numba.njit(cache=True)
@@ -274,14 +301,14 @@ def _wca_all(pos, P, H):
 @numba.njit(cache=True)
 def _total(pos, P, out):
     """Every term's energy (pN nm) at ``pos`` into ``out`` (order of :data:`TERMS`)."""
-    for t in range(5):
+    for t in range(out.shape[0]):
         out[t] = 0.0
     if P.has_bond:
         for b in range(P.b_i.shape[0]):
             i = P.b_i[b]
             j = P.b_j[b]
-            out[0] += _bond_e(pos[i, 0], pos[i, 1], pos[i, 2], pos[j, 0], pos[j, 1],
-                              pos[j, 2], P.b_k[b], P.b_r0[b])
+            out[P.b_t[b]] += _bond_e(pos[i, 0], pos[i, 1], pos[i, 2], pos[j, 0], pos[j, 1],
+                                     pos[j, 2], P.b_k[b], P.b_r0[b], P.b_one[b])
     if P.has_bend:
         for a in range(P.a_i.shape[0]):
             i = P.a_i[a]
@@ -296,6 +323,10 @@ def _total(pos, P, out):
             out[3] += _wall_e(pos[p, 2], P)
         if P.has_pull and P.share[p] != 0.0:
             out[4] -= P.pull_f * P.share[p] * pos[p, 2]
+    if P.has_trap:
+        i = P.t_i
+        j = P.t_j
+        out[6] = _trap_e(pos[i, 0], pos[i, 1], pos[i, 2], pos[j, 0], pos[j, 1], pos[j, 2], P)
 
 
 @numba.njit(cache=True)
@@ -316,7 +347,7 @@ def _delta(pos, idx, new, moved, rigid, P, H, out, thr, ncon, dcon, flip, rinv, 
     smaller set): |R (p - c) - (q - c)| = |(p - c) - R^T (q - c)|, so the new pairs are the
     moved particles' old positions against the unmoved ones turned back by ``rinv`` = R^T.
     """
-    for t in range(5):
+    for t in range(out.shape[0]):
         out[t] = 0.0
     dcon[0] = 0
     m = idx.shape[0]
@@ -331,12 +362,12 @@ def _delta(pos, idx, new, moved, rigid, P, H, out, thr, ncon, dcon, flip, rinv, 
                 if moved[q] > 0 and (rigid or q < p):
                     continue
                 e0 = _bond_e(pos[i, 0], pos[i, 1], pos[i, 2], pos[j, 0], pos[j, 1],
-                             pos[j, 2], P.b_k[b], P.b_r0[b])
+                             pos[j, 2], P.b_k[b], P.b_r0[b], P.b_one[b])
                 e1 = _bond_e(_at(pos, new, moved, i, 0), _at(pos, new, moved, i, 1),
                              _at(pos, new, moved, i, 2), _at(pos, new, moved, j, 0),
                              _at(pos, new, moved, j, 1), _at(pos, new, moved, j, 2),
-                             P.b_k[b], P.b_r0[b])
-                out[0] += e1 - e0
+                             P.b_k[b], P.b_r0[b], P.b_one[b])
+                out[P.b_t[b]] += e1 - e0
         if P.has_bend:
             for t in range(P.a_ptr[p], P.a_ptr[p + 1]):
                 h = P.a_list[t]
@@ -361,6 +392,12 @@ def _delta(pos, idx, new, moved, rigid, P, H, out, thr, ncon, dcon, flip, rinv, 
             out[3] += _wall_e(new[a, 2], P) - _wall_e(pos[p, 2], P)
         if P.has_pull and P.share[p] != 0.0:
             out[4] -= P.pull_f * P.share[p] * (new[a, 2] - pos[p, 2])
+    if P.has_trap and (moved[P.t_i] > 0 or moved[P.t_j] > 0):
+        # (not skipped for rigid moves: a rotation about a tilted axis turns the chord)
+        i = P.t_i
+        j = P.t_j
+        out[6] += _trap_at(pos, new, moved, P) - _trap_e(pos[i, 0], pos[i, 1], pos[i, 2],
+                                                         pos[j, 0], pos[j, 1], pos[j, 2], P)
     if P.has_wca:
         # pairs of two moved particles (a rigid move keeps them)
         if not rigid:
@@ -404,7 +441,7 @@ def _delta(pos, idx, new, moved, rigid, P, H, out, thr, ncon, dcon, flip, rinv, 
                         out[2] -= e
                         dcon[0] -= c
         # ... then the new ones, stopping once the move is sure to be rejected
-        rest = out[0] + out[1] + out[3] + out[4] + out[2]
+        rest = _sum(out)
         if rest > thr:
             return np.inf
         if flip:
@@ -436,9 +473,17 @@ def _delta(pos, idx, new, moved, rigid, P, H, out, thr, ncon, dcon, flip, rinv, 
                     dcon[0] += c
                     if rest > thr:
                         return np.inf
-    elif out[0] + out[1] + out[3] + out[4] > thr:
+    elif _sum(out) > thr:
         return np.inf
-    return out[0] + out[1] + out[2] + out[3] + out[4]
+    return _sum(out)
+
+
+@numba.njit(cache=True)
+def _sum(out):
+    s = 0.0
+    for t in range(out.shape[0]):
+        s += out[t]
+    return s
 
 
 @numba.njit(cache=True)
@@ -515,7 +560,7 @@ def run_chain_moves(pos, P, c_ptr, c_beads, c_fixed, mobile, cum, crank_max, cra
         Uniform [0, 1) and standard normal numbers, one row per proposal.
     stats : int64 (3, 3)
         Added to: rows crankshaft, pivot, bead; columns attempted, refused, accepted.
-    terms : float64 (5,)
+    terms : float64 (NTERMS,)
         Added to: the accepted energy change of each term (pN nm).
 
     Returns
@@ -543,7 +588,7 @@ def run_chain_moves(pos, P, c_ptr, c_beads, c_fixed, mobile, cum, crank_max, cra
     moved = np.zeros(n, np.int64)
     idx = np.empty(n, np.int64)
     new = np.empty((n, 3))
-    dterm = np.zeros(5)
+    dterm = np.zeros(terms.shape[0])
     absum = 0.0
     for t in range(uni.shape[0]):
         r = uni[t, 0]
@@ -635,7 +680,7 @@ def run_chain_moves(pos, P, c_ptr, c_beads, c_fixed, mobile, cum, crank_max, cra
             ncon += dcon[0]
             stats[kind, 2] += 1
             absum += abs(dE)
-            for c in range(5):
+            for c in range(terms.shape[0]):
                 terms[c] += dterm[c]
             for a in range(m):
                 p = idx[a]
@@ -708,31 +753,46 @@ class LocalEnergy:
         self.n_constraints = system.getNumConstraints()
         z = np.zeros(0, np.int64)
         fz = np.zeros(0)
-        p = dict(n=n, has_bond=False, b_i=z, b_j=z, b_k=fz, b_r0=fz,
-                 b_ptr=np.zeros(n + 1, np.int64), b_list=z,
+        p = dict(n=n, has_bond=False, b_i=z, b_j=z, b_k=fz, b_r0=fz, b_t=z,
+                 b_one=np.zeros(0, np.uint8), b_ptr=np.zeros(n + 1, np.int64), b_list=z,
                  has_bend=False, a_i=z, a_j=z, a_k=z, kappa=0.0,
                  a_ptr=np.zeros(n + 1, np.int64), a_list=z,
                  has_wca=False, w_on=np.zeros(n, np.uint8), eps=0.0, sig2=1.0, rc=0.0, rc2=0.0,
                  cell=1.0, e_ptr=np.zeros(n + 1, np.int64), e_list=z,
                  has_wall=False, wall_on=np.zeros(n, np.uint8), wall_k=0.0, wall_z=0.0,
-                 has_pull=False, share=np.zeros(n), pull_f=0.0)
+                 has_pull=False, share=np.zeros(n), pull_f=0.0,
+                 has_trap=False, t_i=0, t_j=0, trap_K=0.0, trap_c=1.0, trap_s=0.0,
+                 trap_kt=0.0)
         present = []
+        bonds = []  # (i, j, k, r0, term, one-sided) of stretch, link, beadwall
+        self._trap_angle = None
         for f in system.getForces():
             name = f.getName()
-            if name == "stretch" and isinstance(f, openmm.HarmonicBondForce):
-                nb = f.getNumBonds()
-                ij = np.zeros((nb, 2), np.int64)
-                k = np.zeros(nb)
-                r0 = np.zeros(nb)
-                for b in range(nb):
+            if name in ("stretch", "link") and isinstance(f, openmm.HarmonicBondForce):
+                t = TERMS.index(name)
+                for b in range(f.getNumBonds()):
                     i, j, r, kk = f.getBondParameters(b)
-                    ij[b] = (i, j)
-                    r0[b] = r.value_in_unit(u.nanometer)
-                    k[b] = kk.value_in_unit(u.kilojoule_per_mole / u.nanometer**2) \
-                        / PN_NM_IN_KJ_MOL
-                ptr, lst = _csr(n, ij)
-                p.update(has_bond=nb > 0, b_i=ij[:, 0].copy(), b_j=ij[:, 1].copy(), b_k=k,
-                         b_r0=r0, b_ptr=ptr, b_list=lst)
+                    bonds.append((i, j, kk.value_in_unit(u.kilojoule_per_mole / u.nanometer**2)
+                                  / PN_NM_IN_KJ_MOL, r.value_in_unit(u.nanometer), t, 0))
+            elif name == "beadwall" and isinstance(f, openmm.CustomBondForce):
+                _check_expr(f, bead_exclusion_force(0, [], 1.0, 1.0, name=name)
+                            .getEnergyFunction())
+                k = _global(f, f"{name}_k") / PN_NM_IN_KJ_MOL
+                r0 = _global(f, f"{name}_R")
+                for b in range(f.getNumBonds()):
+                    i, j, _ = f.getBondParameters(b)
+                    bonds.append((i, j, k, r0, TERMS.index(name), 1))
+            elif name == "trap" and isinstance(f, openmm.CustomCompoundBondForce):
+                _check_expr(f, trap_force(0, 1, 1.0, name=name).getEnergyFunction())
+                if f.getNumBonds() != 1:
+                    raise ValueError(f"LocalEnergy: force {name!r} must hold one bond")
+                (i, j), _ = f.getBondParameters(0)
+                ang = _global(f, f"{name}_angle")
+                p.update(has_trap=True, t_i=int(i), t_j=int(j),
+                         trap_K=_global(f, f"{name}_K") / PN_NM_IN_KJ_MOL,
+                         trap_c=math.cos(ang), trap_s=math.sin(ang),
+                         trap_kt=_global(f, f"{name}_ktilt") / PN_NM_IN_KJ_MOL)
+                self._trap_angle = ang
             elif name == "bend" and isinstance(f, openmm.CustomAngleForce):
                 _check_expr(f, bending_force([], 1.0, name=name).getEnergyFunction())
                 na = f.getNumAngles()
@@ -764,9 +824,17 @@ class LocalEnergy:
                 raise ValueError(f"LocalEnergy: no kernel for force {name!r} "
                                  f"({type(f).__name__}); it knows {', '.join(TERMS)}")
             present.append(name)
+        if bonds:
+            ij = np.array([b[:2] for b in bonds], np.int64).reshape(-1, 2)
+            ptr, lst = _csr(n, ij)
+            p.update(has_bond=True, b_i=ij[:, 0].copy(), b_j=ij[:, 1].copy(),
+                     b_k=np.array([b[2] for b in bonds], float),
+                     b_r0=np.array([b[3] for b in bonds], float),
+                     b_t=np.array([b[4] for b in bonds], np.int64),
+                     b_one=np.array([b[5] for b in bonds], np.uint8), b_ptr=ptr, b_list=lst)
         self.terms = tuple(t for t in TERMS if t in present)
         self.params = _Params(**p)
-        self._out = np.zeros(5)
+        self._out = np.zeros(NTERMS)
 
     def _read_wca(self, f, n: int, p: dict) -> None:
         name = f.getName()
@@ -792,6 +860,21 @@ class LocalEnergy:
         p.update(has_wca=True, w_on=on, eps=_global(f, f"{name}_eps") / PN_NM_IN_KJ_MOL,
                  sig2=sigma * sigma, rc=rc, rc2=rc * rc, cell=CELL_FACTOR * rc, e_ptr=np.cumsum(ptr),
                  e_list=both[:, 1].copy())
+
+    @property
+    def trap_angle(self) -> float | None:
+        """The trap's angle phi0 (rad) the kernels use; None without a trap."""
+        return self._trap_angle
+
+    def set_trap_angle(self, angle_rad: float) -> None:
+        """Use the trap angle ``angle_rad`` (the protocol's ``trap_angle``, which the
+        System's default value does not follow)."""
+        if not self.params.has_trap:
+            raise ValueError("LocalEnergy: no trap")
+        a = float(angle_rad)
+        if a != self._trap_angle:
+            self._trap_angle = a
+            self.params = self.params._replace(trap_c=math.cos(a), trap_s=math.sin(a))
 
     def _pos(self, pos) -> np.ndarray:
         pos = np.ascontiguousarray(pos, dtype=np.float64)
