@@ -58,8 +58,14 @@ import numpy as np
 import openmm
 from openmm import unit as u
 
-from ..forces import (bead_exclusion_force, bending_force, pull_force, trap_force, wall_force,
-                      wca_force)
+from ..forces import (
+    bead_exclusion_force,
+    bending_force,
+    pull_force,
+    trap_force,
+    wall_force,
+    wca_force,
+)
 from ..units import PN_NM_IN_KJ_MOL
 
 __all__ = ["LocalEnergy", "TERMS", "run_chain_moves"]

@@ -49,10 +49,11 @@ from collections.abc import Callable
 
 import numpy as np
 
-from ..kernels.chain import TERMS, LocalEnergy, run_chain_moves
+from ..kernels.chain import NTERMS, TERMS, LocalEnergy, run_chain_moves
+from ..kernels.tweezer import BRAID_KINDS, run_braid_moves
 from .moves import MoveStats
 
-__all__ = ["ChainMoves", "KINDS", "GUARD_REL", "GUARD_ABS_PN_NM"]
+__all__ = ["BraidMoves", "ChainMoves", "KINDS", "BRAID_KINDS", "GUARD_REL", "GUARD_ABS_PN_NM"]
 
 #: Move kinds, in the order of the compiled loop's statistics rows.
 KINDS = ("crankshaft", "pivot", "bead")
@@ -192,7 +193,7 @@ class ChainMoves:
         uni = self.rng.random((n, 6))
         gau = self.rng.standard_normal((n, 3))
         before = self._stats.copy()
-        terms = np.zeros(5)
+        terms = np.zeros(NTERMS)
         absum = run_chain_moves(pos, self.energy.params, self._c_ptr, self._c_beads,
                                 self._c_fixed, self._mobile, self._cum, self.crank_max,
                                 self.crank_angle, self.pivot_angle, self.bead_nm, self.kT,
@@ -218,6 +219,7 @@ class ChainMoves:
         RuntimeError
             When the guard finds the local energies and the engine's disagree.
         """
+        self._sync_trap(energy_fn)
         pos = np.array(get_pos(), np.float64, copy=True, order="C")
         check = self.guard_every > 0 and self._calls % self.guard_every == 0
         self._calls += 1
@@ -231,6 +233,17 @@ class ChainMoves:
         if check:
             self._guard(e0, t0, float(energy_fn()), self.energy.total_terms(pos), terms,
                         absum)
+
+    def _sync_trap(self, energy_fn) -> None:
+        """Give the kernels the engine's current trap angle (the protocol sets
+        ``trap_angle`` in the Context; the System's default is not it). The engine is
+        found as the owner of the bound method ``energy_fn`` (``engine.energy_pN_nm``)."""
+        le = self.energy
+        if le.trap_angle is None:
+            return
+        ctx = getattr(getattr(energy_fn, "__self__", None), "context", None)
+        if ctx is not None:
+            le.set_trap_angle(ctx.getParameter("trap_angle"))
 
     def _guard(self, e0, t0, e1, t1, terms, absum) -> None:
         acc = ", ".join(f"{k} {st.accepted}" for k, st in self.stats.items())
@@ -262,6 +275,142 @@ class ChainMoves:
         :meth:`dnabraid.run.moves.RigidMoves.summary` writes them)."""
         return {"crank_angle_rad": self.crank_angle, "pivot_angle_rad": self.pivot_angle,
                 "bead_move_nm": self.bead_nm, "crank_max_beads": self.crank_max,
+                "moves_per_call": self.moves_per_call, "guard_checks": self.guard_checks,
+                "guard_max_diff_pN_nm": self.guard_max_diff,
+                **{k: v.to_dict() for k, v in self.stats.items()}}
+
+
+class BraidMoves(ChainMoves):
+    """Metropolis moves of a braid (:mod:`dnabraid.kernels.tweezer`): crankshafts inside
+    each strand, single-particle moves, the ``shear`` of the top (bead centre and
+    attachments translated by d, strand bead k by d k / (beads - 1): the pendulum mode)
+    and the ``twist`` (the same weights, turned about the vertical axis through the bead
+    centre: the top in the trap, the strands following). Moves that would change the
+    strands' catenation by more than 0.5 turn (a strand passing the other) are refused.
+    The interface and the guard are :class:`ChainMoves`'.
+
+    Parameters
+    ----------
+    energy : LocalEnergy, Model or System
+    chains : two int arrays
+        The strands, surface -> attachment.
+    fixed : iterable of int
+    center : int
+        The bead centre (moved by bead, shear and twist moves).
+    kT_pN_nm : float
+    moves_per_call : int
+    crank_angle_rad, bead_move_nm, shear_nm, shear_z_nm, twist_rad : float
+        Amplitudes (0 leaves a kind out; ``shear_z_nm`` 0 keeps the shear horizontal).
+    crank_max_beads : int
+    weights : 4 floats
+        Relative probabilities of crankshaft, bead, shear, twist.
+    seed, guard_every, guard_rel, guard_abs_pN_nm
+        As :class:`ChainMoves`'.
+    """
+
+    def __init__(self, energy, chains, fixed, center: int, kT_pN_nm: float, *,
+                 moves_per_call: int, crank_angle_rad: float, bead_move_nm: float,
+                 shear_nm: float, shear_z_nm: float = 0.0, twist_rad: float = 0.0,
+                 crank_max_beads: int = 8, weights=(4.0, 4.0, 1.0, 1.0), seed: int = 1,
+                 guard_every: int = 100, guard_rel: float = GUARD_REL,
+                 guard_abs_pN_nm: float = GUARD_ABS_PN_NM):
+        if moves_per_call < 1:
+            raise ValueError("moves_per_call must be >= 1")
+        amps = (float(crank_angle_rad), float(bead_move_nm), float(shear_nm),
+                float(twist_rad))
+        if min(amps) < 0 or shear_z_nm < 0 or not any(a > 0 for a in amps):
+            raise ValueError("move amplitudes must be >= 0, not all 0")
+        if amps[0] > math.pi or amps[3] > math.pi:
+            raise ValueError("crank_angle_rad and twist_rad must be <= pi")
+        if crank_max_beads < 1:
+            raise ValueError("crank_max_beads must be >= 1")
+        chains = [np.asarray(c, np.int64) for c in chains]
+        if len(chains) != 2 or any(len(c) < 2 for c in chains):
+            raise ValueError("BraidMoves needs two strands of >= 2 beads")
+        w = np.array([float(x) for x in weights], float)
+        if w.shape != (4,) or np.any(w < 0):
+            raise ValueError("weights must be 4 numbers >= 0")
+        w = np.where(np.array(amps) > 0, w, 0.0)
+        if w.sum() <= 0:
+            raise ValueError("no move kind has both a weight and an amplitude")
+        if guard_every < 0:
+            raise ValueError("guard_every must be >= 0")
+        self._energy = energy
+        self.kT = float(kT_pN_nm)
+        self.moves_per_call = int(moves_per_call)
+        self.crank_angle, self.bead_nm, self.shear_nm, self.twist_rad = amps
+        self.shear_z_nm = float(shear_z_nm)
+        self.crank_max = int(crank_max_beads)
+        self.weights = w / w.sum()
+        self._cum = np.cumsum(self.weights)
+        self._cum[-1] = 1.0 + 1e-12
+        self.seed = int(seed)
+        self.guard_every = int(guard_every)
+        self.guard_rel = float(guard_rel)
+        self.guard_abs = float(guard_abs_pN_nm)
+        fixed = {int(i) for i in fixed}
+        self.center = int(center)
+        self._c_ptr = np.concatenate([[0], np.cumsum([len(c) for c in chains])]).astype(
+            np.int64)
+        self._c_beads = np.concatenate(chains).astype(np.int64)
+        isfixed = np.array([int(i) in fixed for i in self._c_beads], np.int64)
+        self._c_fixed = np.concatenate([[0], np.cumsum(isfixed)]).astype(np.int64)
+        self._mobile = np.concatenate([self._c_beads[isfixed == 0],
+                                       [] if self.center in fixed else [self.center]]
+                                      ).astype(np.int64)
+        n = int(max(self._c_beads.max(), self.center)) + 1
+        self._wgt_n = n
+        wgt = np.zeros(n)
+        for c in chains:
+            wgt[c] = np.arange(len(c)) / (len(c) - 1)
+        wgt[self.center] = 1.0
+        wgt[list(fixed & set(range(n)))] = 0.0
+        self._wgt = wgt
+        self.kinds = [k for k, x in zip(BRAID_KINDS, self.weights) if x > 0]
+        self.stats = {k: MoveStats() for k in self.kinds}
+        self._stats = np.zeros((4, 3), np.int64)
+        self.rng = np.random.default_rng([self.seed, 0])
+        self._calls = 0
+        self.guard_checks = 0
+        self.guard_max_diff = 0.0
+        self.catenation = None
+
+    @classmethod
+    def for_model(cls, model, **kw) -> BraidMoves:
+        """Moves of a built braid model (its chains, fixed beads, bead centre and kT)."""
+        return cls(LocalEnergy(model), model.chains, model.fixed, model.bead_center,
+                   model.dna.kT, **kw)
+
+    def _run(self, pos: np.ndarray, n: int) -> tuple[np.ndarray, float]:
+        le = self.energy
+        if le.n != len(self._wgt):
+            wgt = np.zeros(le.n)
+            wgt[:len(self._wgt)] = self._wgt
+            self._wgt = wgt
+        uni = self.rng.random((n, 6))
+        gau = self.rng.standard_normal((n, 3))
+        before = self._stats.copy()
+        terms = np.zeros(NTERMS)
+        absum, cat = run_braid_moves(pos, le.params, self._c_ptr, self._c_beads,
+                                     self._c_fixed, self._mobile, self._wgt, self.center,
+                                     self._cum, self.crank_max, self.crank_angle,
+                                     self.bead_nm, self.shear_nm, self.shear_z_nm,
+                                     self.twist_rad, self.kT, uni, gau, self._stats, terms)
+        self.catenation = float(cat)
+        d = self._stats - before
+        for r, k in enumerate(BRAID_KINDS):
+            if k in self.stats:
+                st = self.stats[k]
+                st.attempted += int(d[r, 0])
+                st.refused += int(d[r, 1])
+                st.accepted += int(d[r, 2])
+        return terms, float(absum)
+
+    def summary(self) -> dict:
+        """Amplitudes, the guard's record and the counts of each kind."""
+        return {"crank_angle_rad": self.crank_angle, "bead_move_nm": self.bead_nm,
+                "shear_nm": self.shear_nm, "shear_z_nm": self.shear_z_nm,
+                "twist_rad": self.twist_rad, "crank_max_beads": self.crank_max,
                 "moves_per_call": self.moves_per_call, "guard_checks": self.guard_checks,
                 "guard_max_diff_pN_nm": self.guard_max_diff,
                 **{k: v.to_dict() for k, v in self.stats.items()}}

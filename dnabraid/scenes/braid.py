@@ -7,6 +7,14 @@ attachment point; the two attachment points and the bead centre C form a rigid t
 C carries the bead's friction and the magnetic force; the sphere of radius R around C
 excludes DNA, so strands cannot slip over the bead and unbraid. The rotational trap
 U = -K cos(phi - 2 pi n) holds the attachment chord's angle phi. No twist (nicked DNA).
+
+``mc_moves`` > 0 adds Metropolis moves after every report interval
+(:class:`dnabraid.run.chain_moves.BraidMoves`, local energies from numba kernels): crankshafts
+inside each strand, single-particle moves, the shear of the whole top (the pendulum mode)
+and its twist in the trap, refusing any move that would pass a strand through the other.
+They sample the same Boltzmann distribution; their time correlations are not physical.
+Opt-in (default 0: Brownian dynamics alone) until the default is re-chosen
+(workflows/results/benchmark_braid_moves.txt).
 """
 
 from __future__ import annotations
@@ -20,6 +28,7 @@ import numpy as np
 from .. import observables as ob
 from .. import units
 from ..forces import bead_exclusion_force, pull_force, stretch_force, trap_force
+from ..run.chain_moves import BraidMoves
 from ..run.contract import StartError
 from .base import SceneError, key
 from .tweezer_base import TurnedScene, lockup_turns
@@ -35,6 +44,11 @@ MAX_START_DRAWS = 200
 #: extremes matrix and several workflows were set up and measured on it; the thermal
 #: default is now a short braid at 20 pN, chosen for convergence (README).
 LONG_BRAID = {"length_nm": 200.0, "force_pN": 2.0, "timestep_safety": 0.3}
+
+MC_MOVES_HELP = ("Metropolis moves after every report interval (crankshaft, bead, shear, twist "
+                 "4:4:1:1; dnabraid.run.chain_moves.BraidMoves): the same equilibrium, sampled "
+                 "faster (workflows/results/benchmark_braid_moves.txt). 0 = Brownian dynamics "
+                 "alone (physical kinetics). Needs alpha = 0 and stretch = 'bonds'")
 
 
 @dataclasses.dataclass(frozen=True)
@@ -70,6 +84,16 @@ class Braid(TurnedScene):
                               "the same; 1 = plateau steepness in [2.5, 6] and a braid-axis "
                               "bow up to 0.25 L, from each replica's seed): overdispersed "
                               "starts let R-hat see an unforgotten start")
+    mc_moves: int = key(0, "", MC_MOVES_HELP)
+    crank_angle_rad: float = key(2.0, "rad", "largest crankshaft angle (an arc of 1-8 beads of "
+                                 "one strand turned about the line through its neighbours)")
+    bead_move_nm: float = key(0.3, "nm", "radius of a single-particle move's ball")
+    shear_nm: float = key(3.0, "nm", "largest horizontal shift of the top (bead centre and "
+                          "attachments) in a shear move; strand bead k moves by k/(beads-1) "
+                          "of it (the pendulum mode)")
+    shear_z_nm: float = key(1.0, "nm", "largest vertical shift of a shear move")
+    twist_rad: float = key(0.05, "rad", "largest turn of the top about the vertical through "
+                           "the bead centre in a twist move (strand bead k: k/(beads-1) of it)")
     mirror: str = key("off", "", "mirror-coupled pairs (variance reduction for handedness "
                       "asymmetries): 'off'; 'original' or 'image' run the two members of a "
                       "pair with one seed and negated turn lists: the image starts from and is "
@@ -89,6 +113,20 @@ class Braid(TurnedScene):
              "are long cannot be bridged)")
         need(self.tether_separation_nm < 2 * self.bead_radius_nm, "tether_separation_nm",
              f"must be < the bead diameter 2 x {self.bead_radius_nm} nm")
+        need(self.mc_moves >= 0, "mc_moves", "must be >= 0 (0 = Brownian dynamics alone)")
+        need(0 <= self.crank_angle_rad <= math.pi, "crank_angle_rad", "must be in [0, pi]")
+        need(0 <= self.twist_rad <= math.pi, "twist_rad", "must be in [0, pi]")
+        for k in ("bead_move_nm", "shear_nm", "shear_z_nm"):
+            need(getattr(self, k) >= 0, k, "must be >= 0")
+        if self.mc_moves > 0:
+            need(max(self.crank_angle_rad, self.bead_move_nm, self.shear_nm,
+                     self.twist_rad) > 0, "mc_moves",
+                 "needs a move: crank_angle_rad, bead_move_nm, shear_nm or twist_rad > 0")
+            need(self.alpha == 0.0, "mc_moves",
+                 "the moves' local energies have no chiral term; set alpha=0 or mc_moves=0")
+            need(self.stretch == "bonds", "mc_moves",
+                 "the Metropolis moves need stretch='bonds' (they change bond lengths); "
+                 "set mc_moves=0 for rigid bonds")
         n_lock = lockup_turns(self.length_nm, d)
         need(max(abs(t) for t in self.turns) <= n_lock, "turns",
              f"|turns| must be <= {n_lock:.2f}: more turns than a {self.length_nm} nm braid "
@@ -133,6 +171,14 @@ class Braid(TurnedScene):
         kit.bound("trap", "link")
         kit.attachments = att
         kit.bead_center = center
+        if self.mc_moves > 0:
+            # the LocalEnergy is built from the finished System at the first call
+            kit.moves = BraidMoves(kit.system, chains, kit.fixed, center, d.kT,
+                                   moves_per_call=self.mc_moves,
+                                   crank_angle_rad=self.crank_angle_rad,
+                                   bead_move_nm=self.bead_move_nm, shear_nm=self.shear_nm,
+                                   shear_z_nm=self.shear_z_nm, twist_rad=self.twist_rad,
+                                   seed=self.seed)
         return {"bead_center": center, "zeta_center_pN_ns_per_nm": zeta_center,
                 "zeta_attach_pN_ns_per_nm": d.zeta_bead,
                 "zeta_bead_physical_pN_ns_per_nm": zeta_phys,

@@ -1,0 +1,407 @@
+"""Compiled Metropolis moves of the braid (two strands, their attachments and the magnetic
+bead's centre), on the local energies of :mod:`dnabraid.kernels.chain` (which reproduce
+the braid's ``link``, ``trap``, ``beadwall`` and ``pull`` terms as well as the chains').
+
+Kinds (rows of the statistics, in this order):
+
+0. ``crankshaft``: an arc i..j of one strand (1 ... ``crank_max`` beads, no immobile bead),
+   turned about the line through beads i-1 and j+1 (the arc ends at most one bead below
+   the attachment, which is never in it);
+1. ``bead``: one mobile particle (strand beads, attachments, bead centre) displaced
+   uniformly in a ball;
+2. ``shear``: the top (bead centre and both attachments) translated by d, d uniform in
+   the cylinder |d_xy| <= ``shear_nm``, |d_z| <= ``shear_z_nm``, and strand bead k by
+   w_k d, w_k = k / (beads - 1) (0 at the surface, 1 at the attachment): the pendulum of
+   the whole top. A fixed linear map of the positions (Jacobian 1, d and -d equally
+   likely), so plain Metropolis is exact;
+3. ``twist``: every particle turned about the vertical axis through the bead centre by
+   w_k theta (centre and attachments by theta), theta uniform in [-``twist_rad``,
+   ``twist_rad``]: the top's rotation in the trap with the strands following. Each
+   particle's map is a rotation about an axis the move does not change (the centre's
+   position), so Jacobian 1 and the reverse move is -theta.
+
+Topology: a move may pass one strand through the other, which the Brownian dynamics
+cannot (excluded volume). Every proposal that the Metropolis test would accept is checked:
+the catenation (Gauss integral of the two strands closed by vertical rays,
+:func:`dnabraid.geometry.curves.catenation_number`, twinned here) may not change by more
+than 0.5 turn; otherwise the move is refused (statistics column 1). Crankshafts and bead
+moves only recompute the changed segments against the other strand, and only when the
+other strand (rays included) comes within the ball that the moved segments sweep
+(a rotation keeps every distance to a point of its axis, so a crankshaft sweeps inside
+the ball about the axis' midpoint through its farthest bead). Shear and twist recompute
+the whole sum.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numba
+import numpy as np
+
+from .chain import _delta, _hash_build, _hash_move, _rotate_into, _rotation, _wca_all
+
+__all__ = ["BRAID_KINDS", "catenation", "run_braid_moves"]
+
+#: Move kinds, in the order of :func:`run_braid_moves`' statistics rows.
+BRAID_KINDS = ("crankshaft", "bead", "shear", "twist")
+
+
+# ------------------------------------------------------------------------------- catenation
+@numba.njit(cache=True)
+def _tri(v1x, v1y, v1z, v2x, v2y, v2z, v3x, v3y, v3z):
+    n1 = math.sqrt(v1x * v1x + v1y * v1y + v1z * v1z)
+    n2 = math.sqrt(v2x * v2x + v2y * v2y + v2z * v2z)
+    n3 = math.sqrt(v3x * v3x + v3y * v3y + v3z * v3z)
+    if n1 == 0.0 or n2 == 0.0 or n3 == 0.0:
+        return 0.0
+    num = v1x * (v2y * v3z - v2z * v3y) + v1y * (v2z * v3x - v2x * v3z) \
+        + v1z * (v2x * v3y - v2y * v3x)
+    den = n1 * n2 * n3 + (v1x * v2x + v1y * v2y + v1z * v2z) * n3 \
+        + (v1x * v3x + v1y * v3y + v1z * v3z) * n2 + (v2x * v3x + v2y * v3y + v2z * v3z) * n1
+    return 2.0 * math.atan2(num, den)
+
+
+@numba.njit(cache=True)
+def _omega(a, b, c, d):
+    """Signed solid angle of segment a->b against c->d (curves.pair_solid_angles)."""
+    v1x = c[0] - a[0]
+    v1y = c[1] - a[1]
+    v1z = c[2] - a[2]
+    v2x = c[0] - b[0]
+    v2y = c[1] - b[1]
+    v2z = c[2] - b[2]
+    v3x = d[0] - b[0]
+    v3y = d[1] - b[1]
+    v3z = d[2] - b[2]
+    v4x = d[0] - a[0]
+    v4y = d[1] - a[1]
+    v4z = d[2] - a[2]
+    return _tri(v1x, v1y, v1z, v2x, v2y, v2z, v3x, v3y, v3z) + _tri(
+        v1x, v1y, v1z, v3x, v3y, v3z, v4x, v4y, v4z)
+
+
+@numba.njit(cache=True)
+def _vertex(pos, new, moved, use_new, beads, e, ray, out):
+    """Vertex e of a strand extended by vertical rays (0: below bead 0, 1..n: beads,
+    n + 1: above the last bead), at the positions before (use_new False) or after."""
+    n = beads.shape[0]
+    k = min(max(e - 1, 0), n - 1)
+    p = beads[k]
+    s = moved[p] if use_new else 0
+    for c in range(3):
+        out[c] = new[s - 1, c] if s > 0 else pos[p, c]
+    if e == 0:
+        out[2] -= ray
+    elif e == n + 1:
+        out[2] += ray
+
+
+@numba.njit(cache=True)
+def _cat_part(pos, new, moved, use_new, b1, b2, lo1, hi1, lo2, hi2, ray):
+    """Gauss sum / 4 pi over segments lo1..hi1 of strand 1 and lo2..hi2 of strand 2 of the
+    ray-extended strands (segment e joins vertices e and e + 1)."""
+    a = np.empty(3)
+    b = np.empty(3)
+    c = np.empty(3)
+    d = np.empty(3)
+    tot = 0.0
+    for e in range(lo1, hi1 + 1):
+        _vertex(pos, new, moved, use_new, b1, e, ray, a)
+        _vertex(pos, new, moved, use_new, b1, e + 1, ray, b)
+        for f in range(lo2, hi2 + 1):
+            _vertex(pos, new, moved, use_new, b2, f, ray, c)
+            _vertex(pos, new, moved, use_new, b2, f + 1, ray, d)
+            tot += _omega(a, b, c, d)
+    return tot / (4.0 * math.pi)
+
+
+@numba.njit(cache=True)
+def _extent(pos, b1, b2):
+    best = 1e-12
+    for beads in (b1, b2):
+        for c in range(3):
+            lo = np.inf
+            hi = -np.inf
+            for k in range(beads.shape[0]):
+                v = pos[beads[k], c]
+                lo = min(lo, v)
+                hi = max(hi, v)
+            best = max(best, hi - lo)
+    return best
+
+
+@numba.njit(cache=True)
+def _catenation(pos, b1, b2, ray):
+    moved = np.zeros(1, np.int64)
+    return _cat_part(pos, pos[:0], moved, False, b1, b2, 0, b1.shape[0], 0, b2.shape[0], ray)
+
+
+def catenation(pos, strand1, strand2, ray_length: float | None = None) -> float:
+    """Compiled twin of :func:`dnabraid.geometry.curves.catenation_number` (strands given
+    as bead indices into ``pos``)."""
+    pos = np.ascontiguousarray(pos, np.float64)
+    b1 = np.ascontiguousarray(strand1, np.int64)
+    b2 = np.ascontiguousarray(strand2, np.int64)
+    ray = 1e4 * _extent(pos, b1, b2) if ray_length is None else float(ray_length)
+    return float(_catenation(pos, b1, b2, ray))
+
+
+@numba.njit(cache=True)
+def _seg_point_d2(ax, ay, az, bx, by, bz, px, py, pz):
+    """Squared distance from point p to segment a-b."""
+    ux = bx - ax
+    uy = by - ay
+    uz = bz - az
+    wx = px - ax
+    wy = py - ay
+    wz = pz - az
+    uu = ux * ux + uy * uy + uz * uz
+    t = 0.0
+    if uu > 0.0:
+        t = min(max((wx * ux + wy * uy + wz * uz) / uu, 0.0), 1.0)
+    dx = wx - t * ux
+    dy = wy - t * uy
+    dz = wz - t * uz
+    return dx * dx + dy * dy + dz * dz
+
+
+@numba.njit(cache=True)
+def _near(pos, beads, ray, cx, cy, cz, r2):
+    """Whether a segment of the ray-extended strand comes within sqrt(r2) of c."""
+    a = np.empty(3)
+    b = np.empty(3)
+    moved = np.zeros(1, np.int64)
+    for e in range(beads.shape[0] + 1):
+        _vertex(pos, pos[:0], moved, False, beads, e, ray, a)
+        _vertex(pos, pos[:0], moved, False, beads, e + 1, ray, b)
+        if _seg_point_d2(a[0], a[1], a[2], b[0], b[1], b[2], cx, cy, cz) <= r2:
+            return True
+    return False
+
+
+# ------------------------------------------------------------------------------- the loop
+@numba.njit(cache=True)
+def run_braid_moves(pos, P, c_ptr, c_beads, c_fixed, mobile, wgt, center, cum, crank_max,
+                    crank_angle, bead_nm, shear_nm, shear_z_nm, twist_rad, kT, uni, gau,
+                    stats, terms):
+    """Metropolis crankshaft, bead, shear and twist moves of a braid on ``pos`` (modified
+    in place; module docstring).
+
+    Parameters
+    ----------
+    pos : float64 (N, 3), nm
+    P : chain._Params
+    c_ptr, c_beads, c_fixed : int64
+        The two strands (CSR, surface -> attachment) and prefix counts of immobile beads.
+    mobile : int64
+        Particles of bead moves.
+    wgt : float64 (N,)
+        Weights of shear and twist (0: not moved by them).
+    center : int
+        The bead centre (axis of the twist).
+    cum : float64 (4,)
+        Cumulative probabilities of the kinds.
+    kT : float
+    uni : float64 (n, 6), gau : float64 (n, 3)
+    stats : int64 (4, 3)
+        Added to: attempted, refused (topology or degenerate), accepted per kind.
+    terms : float64 (NTERMS,)
+        Added to: the accepted energy change per term (pN nm).
+
+    Returns
+    -------
+    (float, float)
+        Sum of |dE| over accepted moves (pN nm) and the final catenation (turns).
+    """
+    n = pos.shape[0]
+    b1 = c_beads[c_ptr[0]:c_ptr[1]]
+    b2 = c_beads[c_ptr[1]:c_ptr[2]]
+    n1 = b1.shape[0]
+    n2 = b2.shape[0]
+    ray = 1e4 * _extent(pos, b1, b2)
+    cat = _catenation(pos, b1, b2, ray)
+    if P.has_wca:
+        H = _hash_build(pos, P.w_on, P.cell)
+    else:
+        H = _hash_build(pos[:0], P.w_on[:0], 1.0)
+    ncon = _wca_all(pos, P, H)[1] if P.has_wca else 0
+    rinv = np.eye(3)
+    cen = np.zeros(3)
+    dcon = np.zeros(1, np.int64)
+    moved = np.zeros(n, np.int64)
+    idx = np.empty(n, np.int64)
+    new = np.empty((n, 3))
+    dterm = np.zeros(terms.shape[0])
+    nmob = mobile.shape[0]
+    absum = 0.0
+    for t in range(uni.shape[0]):
+        r = uni[t, 0]
+        kind = 3
+        for q in range(3):
+            if r < cum[q]:
+                kind = q
+                break
+        stats[kind, 0] += 1
+        m = 0
+        ch = 0 if uni[t, 1] < 0.5 else 1
+        s = c_ptr[ch]
+        nb = c_ptr[ch + 1] - s
+        lo = 0
+        hi = 0
+        rigid = kind == 0
+        # ball that the moved segments sweep (crankshaft, bead): centre, radius^2
+        bx = 0.0
+        by = 0.0
+        bz = 0.0
+        br2 = 0.0
+        if kind == 0:
+            mmax = min(crank_max, nb - 2)
+            if mmax < 1:
+                stats[kind, 1] += 1
+                continue
+            ln = 1 + min(int(uni[t, 3] * mmax), mmax - 1)
+            i = 1 + min(int(uni[t, 2] * (nb - 1 - ln)), nb - 2 - ln)
+            j = i + ln - 1
+            pa = c_beads[s + i - 1]
+            pb = c_beads[s + j + 1]
+            ax = pos[pb, 0] - pos[pa, 0]
+            ay = pos[pb, 1] - pos[pa, 1]
+            az = pos[pb, 2] - pos[pa, 2]
+            nrm = math.sqrt(ax * ax + ay * ay + az * az)
+            if c_fixed[s + j + 1] - c_fixed[s + i] > 0 or nrm < 1e-9:
+                stats[kind, 1] += 1
+                continue
+            R = _rotation(ax / nrm, ay / nrm, az / nrm, crank_angle * (2.0 * uni[t, 4] - 1.0))
+            bx = 0.5 * (pos[pa, 0] + pos[pb, 0])
+            by = 0.5 * (pos[pa, 1] + pos[pb, 1])
+            bz = 0.5 * (pos[pa, 2] + pos[pb, 2])
+            br2 = 0.25 * nrm * nrm
+            for k in range(i, j + 1):
+                p = c_beads[s + k]
+                _rotate_into(pos, R, pos[pa, 0], pos[pa, 1], pos[pa, 2], p, new, m)
+                dx = pos[p, 0] - bx
+                dy = pos[p, 1] - by
+                dz = pos[p, 2] - bz
+                br2 = max(br2, dx * dx + dy * dy + dz * dz)
+                idx[m] = p
+                m += 1
+                moved[p] = m
+            lo = i  # changed segments of the extended strand: i .. j + 1
+            hi = j + 1
+        elif kind == 1:
+            gx = gau[t, 0]
+            gy = gau[t, 1]
+            gz = gau[t, 2]
+            nrm = math.sqrt(gx * gx + gy * gy + gz * gz)
+            if nmob == 0 or nrm == 0.0:
+                stats[kind, 1] += 1
+                continue
+            p = mobile[min(int(uni[t, 2] * nmob), nmob - 1)]
+            rad = bead_nm * uni[t, 3] ** (1.0 / 3.0) / nrm
+            new[0, 0] = pos[p, 0] + rad * gx
+            new[0, 1] = pos[p, 1] + rad * gy
+            new[0, 2] = pos[p, 2] + rad * gz
+            idx[0] = p
+            m = 1
+            moved[p] = 1
+            # which strand, and where (the centre is in none: no topology to check)
+            ch = -1
+            for c in range(2):
+                for k in range(c_ptr[c + 1] - c_ptr[c]):
+                    if c_beads[c_ptr[c] + k] == p:
+                        ch = c
+                        lo = k
+                        hi = k + 1
+            if ch >= 0:
+                # the two segments at p sweep inside the ball about p through its
+                # neighbours, widened by the displacement
+                s = c_ptr[ch]
+                nb = c_ptr[ch + 1] - s
+                rr = 0.0
+                for k in (lo - 1, lo + 1):
+                    if 0 <= k < nb:
+                        q = c_beads[s + k]
+                        dx = pos[q, 0] - pos[p, 0]
+                        dy = pos[q, 1] - pos[p, 1]
+                        dz = pos[q, 2] - pos[p, 2]
+                        rr = max(rr, math.sqrt(dx * dx + dy * dy + dz * dz))
+                if lo == nb - 1:
+                    rr = np.inf  # the attachment moves its ray
+                bx = pos[p, 0]
+                by = pos[p, 1]
+                bz = pos[p, 2]
+                br2 = (rr + bead_nm) ** 2
+        else:
+            if kind == 2:
+                rho = shear_nm * math.sqrt(uni[t, 2])
+                ang = 2.0 * math.pi * uni[t, 3]
+                dx = rho * math.cos(ang)
+                dy = rho * math.sin(ang)
+                dz = shear_z_nm * (2.0 * uni[t, 4] - 1.0)
+                for p in range(n):
+                    w = wgt[p]
+                    if w > 0.0:
+                        new[m, 0] = pos[p, 0] + w * dx
+                        new[m, 1] = pos[p, 1] + w * dy
+                        new[m, 2] = pos[p, 2] + w * dz
+                        idx[m] = p
+                        m += 1
+                        moved[p] = m
+            else:
+                th = twist_rad * (2.0 * uni[t, 2] - 1.0)
+                cx = pos[center, 0]
+                cy = pos[center, 1]
+                for p in range(n):
+                    w = wgt[p]
+                    if w > 0.0:
+                        c = math.cos(w * th)
+                        sn = math.sin(w * th)
+                        x = pos[p, 0] - cx
+                        y = pos[p, 1] - cy
+                        new[m, 0] = cx + c * x - sn * y
+                        new[m, 1] = cy + sn * x + c * y
+                        new[m, 2] = pos[p, 2]
+                        idx[m] = p
+                        m += 1
+                        moved[p] = m
+        thr = -kT * math.log(uni[t, 5]) if uni[t, 5] > 0.0 else np.inf
+        dE = _delta(pos, idx[:m], new[:m], moved, rigid, P, H, dterm, thr, ncon, dcon, False,
+                    rinv, cen)
+        ok = math.isfinite(dE) and (dE <= 0.0 or dE < thr)
+        if ok:
+            # topology: the catenation may not jump
+            newcat = cat
+            if kind >= 2:
+                newcat = _cat_part(pos, new, moved, True, b1, b2, 0, n1, 0, n2, ray)
+            elif ch >= 0:
+                other = b2 if ch == 0 else b1
+                if _near(pos, other, ray, bx, by, bz, br2):
+                    if ch == 0:
+                        d = _cat_part(pos, new, moved, True, b1, b2, lo, hi, 0, n2, ray) \
+                            - _cat_part(pos, new, moved, False, b1, b2, lo, hi, 0, n2, ray)
+                    else:
+                        d = _cat_part(pos, new, moved, True, b1, b2, 0, n1, lo, hi, ray) \
+                            - _cat_part(pos, new, moved, False, b1, b2, 0, n1, lo, hi, ray)
+                    newcat = cat + d
+            if abs(newcat - cat) > 0.5:
+                ok = False
+                stats[kind, 1] += 1
+            else:
+                cat = newcat
+        if ok:
+            ncon += dcon[0]
+            stats[kind, 2] += 1
+            absum += abs(dE)
+            for c in range(terms.shape[0]):
+                terms[c] += dterm[c]
+            for a in range(m):
+                p = idx[a]
+                pos[p, 0] = new[a, 0]
+                pos[p, 1] = new[a, 1]
+                pos[p, 2] = new[a, 2]
+                if P.has_wca and P.w_on[p]:
+                    _hash_move(H, p, new[a, 0], new[a, 1], new[a, 2])
+        for a in range(m):
+            moved[idx[a]] = 0
+    return absum, cat
