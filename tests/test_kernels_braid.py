@@ -1,0 +1,164 @@
+"""The braid's terms in the compiled local energies (link, trap, beadwall, pull on the bead
+centre, with the strands' stretch, bend, WCA and wall) against OpenMM (Reference platform),
+the compiled catenation against dnabraid.geometry.curves, and the braid moves' loop.
+
+Configurations: the built start at several turn values, randomly perturbed (beads shaken
+by 1.5 nm: WCA overlaps, wall contacts), the top tilted and turned against the trap, DNA
+beads pushed into the magnetic bead. Tolerance as tests/test_kernels.py: relative 1e-9 or
+1e-6 pN nm absolute.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from dnabraid.geometry.curves import catenation_number
+from dnabraid.kernels import TERMS, LocalEnergy
+from dnabraid.kernels.tweezer import catenation
+from dnabraid.run.chain_moves import BraidMoves
+from dnabraid.run.engine import Engine
+from dnabraid.scenes import make_scene
+
+REL = 1e-9
+ABS = 1e-6
+
+
+def _scene(**kw):
+    return make_scene("braid", dict({"length_nm": 100.0, "force_pN": 2.0, "replicas": 1,
+                                     "turns": [0.0]}, **kw))
+
+
+def _configs(sc, m, rng, turns=(0.0, 1.5, -2.0)):
+    out = []
+    R = sc.bead_radius_nm
+    c = m.bead_center
+    dna = [int(i) for ch in m.chains for i in ch[1:-2]]
+    for n in turns:
+        pos = sc.start_positions(m, n)
+        out.append((n, pos))
+        p = pos + rng.normal(scale=1.5, size=pos.shape)
+        for ch in m.chains:
+            p[ch[0]] = pos[ch[0]]
+        p[m.chains[0][3], 2] = -1.0  # into the wall
+        # a DNA bead pushed into the magnetic bead, the top turned and tilted
+        k = dna[-1]
+        p[k] = p[c] + (R - 3.0) * (p[k] - p[c]) / np.linalg.norm(p[k] - p[c])
+        p[m.attachments[1]] += np.array([1.0, 3.0, 2.0])
+        out.append((n, p))
+    return out
+
+
+def _openmm(eng, m, pos):
+    eng.set_positions(pos)
+    return {t: eng.energy_pN_nm(groups=[g]) for t, g in m.forces.items()}
+
+
+def _set_angle(eng, le, n):
+    eng.context.setParameter("trap_angle", 2 * np.pi * n)
+    le.set_trap_angle(2 * np.pi * n)
+
+
+def test_braid_terms_equal_openmm():
+    sc = _scene()
+    m = sc.build()
+    le = LocalEnergy(m)
+    assert set(le.terms) == set(m.forces) == set(TERMS)
+    eng = Engine.for_model(m, platform="Reference")
+    rng = np.random.default_rng(3)
+    seen = dict.fromkeys(le.terms, False)
+    for n, pos in _configs(sc, m, rng):
+        _set_angle(eng, le, n)
+        ref = _openmm(eng, m, pos)
+        mine = le.total_terms(pos)
+        for t in le.terms:
+            assert abs(mine[t] - ref[t]) <= max(REL * abs(ref[t]), ABS), (n, t, mine[t], ref[t])
+            seen[t] |= abs(ref[t]) > 1.0
+    assert all(seen.values()), seen
+
+
+def test_braid_delta_equals_openmm_difference():
+    sc = _scene()
+    m = sc.build()
+    le = LocalEnergy(m)
+    eng = Engine.for_model(m, platform="Reference")
+    rng = np.random.default_rng(4)
+    top = [m.bead_center, *m.attachments]
+    for n, pos in _configs(sc, m, rng, turns=(0.5, -1.0)):
+        _set_angle(eng, le, n)
+        before = _openmm(eng, m, pos)
+        for _ in range(10):
+            for idx in (np.array(top), np.array([m.attachments[0]]), np.array([m.bead_center]),
+                        rng.choice(len(pos), 6, replace=False)):
+                new = pos[idx] + rng.normal(scale=2.0, size=(len(idx), 3))
+                moved = pos.copy()
+                moved[idx] = new
+                after = _openmm(eng, m, moved)
+                mine = le.delta_terms(pos, idx, new)
+                for t in le.terms:
+                    want = after[t] - before[t]
+                    tol = max(REL * max(abs(after[t]), abs(before[t])), ABS)
+                    assert abs(mine[t] - want) <= tol, (t, mine[t], want)
+
+
+def test_compiled_catenation_equals_numpy():
+    sc = _scene()
+    m = sc.build()
+    rng = np.random.default_rng(5)
+    for n, pos in _configs(sc, m, rng, turns=(0.0, 1.0, -2.5)):
+        want = catenation_number(pos[m.chains[0]], pos[m.chains[1]])
+        assert abs(catenation(pos, *m.chains) - want) < 1e-9
+        assert abs(want - n) < 0.2
+
+
+@pytest.mark.parametrize("turns", [0.0, 1.5])
+def test_braid_moves_add_up_to_the_openmm_change_and_keep_the_topology(turns):
+    sc = _scene()
+    m = sc.build()
+    eng = Engine.for_model(m, platform="Reference")
+    pos = sc.start_positions(m, turns)
+    mv = BraidMoves.for_model(m, moves_per_call=1, crank_angle_rad=2.5, bead_move_nm=0.4,
+                              shear_nm=3.0, shear_z_nm=1.0, twist_rad=0.05, seed=2)
+    _set_angle(eng, mv.energy, turns)
+    before = _openmm(eng, m, pos)
+    new, terms = mv.run(pos, 6000)
+    after = _openmm(eng, m, new)
+    for k, t in enumerate(TERMS):
+        want = after[t] - before[t]
+        assert abs(terms[k] - want) <= 1e-8 * (1.0 + abs(after[t]) + abs(before[t])), t
+    assert all(mv.stats[k].accepted > 50 for k in mv.kinds)
+    cat = catenation_number(new[m.chains[0]], new[m.chains[1]])
+    assert abs(cat - turns) < 0.5 and abs(cat - mv.catenation) < 1e-6
+    # fixed beads never move
+    assert np.array_equal(new[list(m.fixed)], pos[list(m.fixed)])
+
+
+def test_a_strand_passage_changes_the_catenation_by_one():
+    """Strands straight up at x = -3 and +3 nm; strand 1's beads 9 and 11 placed beside
+    bead 10 horizontally, so that bead 10 pulled to x = +9 sweeps the triangle through
+    strand 2: the catenation (compiled and numpy) jumps by 1, which the moves refuse."""
+    sc = _scene(tether_separation_nm=6.0)
+    m = sc.build()
+    pos = m.positions.copy()
+    a, b = m.chains
+    for k, (i, j) in enumerate(zip(a, b)):
+        pos[i] = (-3.0, 0.0, 5.0 * k)
+        pos[j] = (3.0, 0.0, 5.0 * k)
+    pos[a[9]] = (-3.0, -2.0, 50.0)
+    pos[a[11]] = (-3.0, 2.0, 50.0)
+    c0 = catenation(pos, a, b)
+    for x, want in ((1.0, 0.0), (9.0, 1.0)):
+        p = pos.copy()
+        p[a[10], 0] = x
+        got = catenation(p, a, b)
+        assert abs(got - catenation_number(p[a], p[b])) < 1e-9
+        assert abs(abs(got - c0) - want) < 1e-3, (x, got, c0)
+
+
+def test_braid_scene_keys():
+    assert _scene().mc_moves == 0 and make_scene("braid").mc_moves == 0
+    assert _scene().build().moves is None
+    m = _scene(mc_moves=10).build()
+    assert isinstance(m.moves, BraidMoves)
+    with pytest.raises(Exception, match="chiral"):
+        _scene(mc_moves=10, alpha=0.5)
