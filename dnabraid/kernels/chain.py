@@ -157,7 +157,7 @@ def _hash_remove(H, p):
 
 
 @numba.njit(cache=True)
-def _hash_move(H, p, x, y, z):
+def hash_move(H, p, x, y, z):
     """Re-file particle p (already in the table) at (x, y, z) if its cell changed."""
     cx, cy, cz = _cells(x, y, z, H.inv_cell)
     if _key(cx, cy, cz) != H.key[p]:
@@ -166,7 +166,7 @@ def _hash_move(H, p, x, y, z):
 
 
 @numba.njit(cache=True)
-def _hash_build(pos, on, cell_nm):
+def hash_build(pos, on, cell_nm):
     n = pos.shape[0]
     nb = 64
     while nb < 2 * n:
@@ -290,7 +290,7 @@ def _wall_e(z, P):
 
 # --------------------------------------------------------------------------- energies
 @numba.njit(cache=True)
-def _wca_all(pos, P, H):
+def wca_all(pos, P, H):
     """WCA energy (pN nm) and number of interacting pairs (r <= r_c) of the whole model."""
     moved = np.zeros(P.n, np.int64)
     e = 0.0
@@ -323,7 +323,7 @@ def _total(pos, P, out):
             out[1] += _bend_e(pos[i, 0], pos[i, 1], pos[i, 2], pos[j, 0], pos[j, 1],
                               pos[j, 2], pos[k, 0], pos[k, 1], pos[k, 2], P.kappa)
     if P.has_wca:
-        out[2] = _wca_all(pos, P, _hash_build(pos, P.w_on, P.cell))[0]
+        out[2] = wca_all(pos, P, hash_build(pos, P.w_on, P.cell))[0]
     for p in range(P.n):
         if P.has_wall and P.wall_on[p]:
             out[3] += _wall_e(pos[p, 2], P)
@@ -336,7 +336,7 @@ def _total(pos, P, out):
 
 
 @numba.njit(cache=True)
-def _delta(pos, idx, new, moved, rigid, P, H, out, thr, ncon, dcon, flip, rinv, center):
+def delta_kernel(pos, idx, new, moved, rigid, P, H, out, thr, ncon, dcon, flip, rinv, center):
     """Energy change (pN nm) when particles ``idx`` move to ``new``; per term into ``out``.
 
     ``moved[p]`` must hold the slot + 1 of every moved particle (0 for the others) and
@@ -494,22 +494,22 @@ def _sum(out):
 
 @numba.njit(cache=True)
 def _delta_once(pos, idx, new, P, out):
-    """:func:`_delta` with a table built for this call and any move (not rigid)."""
+    """:func:`delta_kernel` with a table built for this call and any move (not rigid)."""
     moved = np.zeros(P.n, np.int64)
     for a in range(idx.shape[0]):
         moved[idx[a]] = a + 1
     if P.has_wca:
-        H = _hash_build(pos, P.w_on, P.cell)
+        H = hash_build(pos, P.w_on, P.cell)
     else:
-        H = _hash_build(pos[:0], P.w_on[:0], 1.0)
+        H = hash_build(pos[:0], P.w_on[:0], 1.0)
     dcon = np.zeros(1, np.int64)
-    return _delta(pos, idx, new, moved, False, P, H, out, np.inf, 1, dcon, False,
+    return delta_kernel(pos, idx, new, moved, False, P, H, out, np.inf, 1, dcon, False,
                   np.eye(3), np.zeros(3))
 
 
 # ------------------------------------------------------------------------ Monte Carlo
 @numba.njit(cache=True)
-def _rotation(ax, ay, az, theta):
+def rotation_matrix(ax, ay, az, theta):
     """Rotation matrix by ``theta`` about the unit vector (ax, ay, az) (Rodrigues)."""
     c = math.cos(theta)
     s = math.sin(theta)
@@ -528,7 +528,37 @@ def _rotation(ax, ay, az, theta):
 
 
 @numba.njit(cache=True)
-def _rotate_into(pos, R, cx, cy, cz, p, new, a):
+def crank_proposal(pos, c_beads, c_fixed, s, nb, crank_max, crank_angle, u_pos, u_len, u_ang):
+    """A crankshaft proposal on the strand whose beads are ``c_beads[s:s + nb]``: an arc
+    i..j of 1 ... ``crank_max`` beads (never the strand's first or last bead) turned by an
+    angle uniform in [-``crank_angle``, ``crank_angle``] about the line through beads i-1
+    and j+1 (Vologodskii et al. 1992), from three uniforms in [0, 1).
+
+    Returns (ok, i, j, pa, pb, R, nrm): ``ok`` False when the strand is too short, a fixed
+    bead would move or the pivots coincide; ``pa``, ``pb`` the pivot particles, ``R`` the
+    rotation, ``nrm`` the pivots' distance (nm).
+    """
+    R = np.eye(3)
+    mmax = min(crank_max, nb - 2)
+    if mmax < 1:
+        return False, 0, 0, 0, 0, R, 0.0
+    ln = 1 + min(int(u_len * mmax), mmax - 1)
+    i = 1 + min(int(u_pos * (nb - 1 - ln)), nb - 2 - ln)
+    j = i + ln - 1
+    pa = c_beads[s + i - 1]
+    pb = c_beads[s + j + 1]
+    ax = pos[pb, 0] - pos[pa, 0]
+    ay = pos[pb, 1] - pos[pa, 1]
+    az = pos[pb, 2] - pos[pa, 2]
+    nrm = math.sqrt(ax * ax + ay * ay + az * az)
+    if c_fixed[s + j + 1] - c_fixed[s + i] > 0 or nrm < 1e-9:
+        return False, i, j, pa, pb, R, nrm
+    R = rotation_matrix(ax / nrm, ay / nrm, az / nrm, crank_angle * (2.0 * u_ang - 1.0))
+    return True, i, j, pa, pb, R, nrm
+
+
+@numba.njit(cache=True)
+def rotate_into(pos, R, cx, cy, cz, p, new, a):
     x = pos[p, 0] - cx
     y = pos[p, 1] - cy
     z = pos[p, 2] - cz
@@ -579,10 +609,10 @@ def run_chain_moves(pos, P, c_ptr, c_beads, c_fixed, mobile, cum, crank_max, cra
     nch = c_ptr.shape[0] - 1
     nmob = mobile.shape[0]
     if P.has_wca:
-        H = _hash_build(pos, P.w_on, P.cell)
+        H = hash_build(pos, P.w_on, P.cell)
     else:
-        H = _hash_build(pos[:0], P.w_on[:0], 1.0)
-    ncon = _wca_all(pos, P, H)[1] if P.has_wca else 0
+        H = hash_build(pos[:0], P.w_on[:0], 1.0)
+    ncon = wca_all(pos, P, H)[1] if P.has_wca else 0
     n_on = 0
     if P.has_wca:
         for p in range(n):
@@ -607,26 +637,15 @@ def run_chain_moves(pos, P, c_ptr, c_beads, c_fixed, mobile, cum, crank_max, cra
         m = 0
         if kind == 0:
             # crankshaft: beads i..j turned about the line through beads i-1 and j+1
-            mmax = min(crank_max, nb - 2)
-            if mmax < 1:
+            ok, i, j, pa, pb, R, nrm = crank_proposal(pos, c_beads, c_fixed, s, nb, crank_max,
+                                                      crank_angle, uni[t, 2], uni[t, 3],
+                                                      uni[t, 4])
+            if not ok:
                 stats[kind, 1] += 1
                 continue
-            ln = 1 + min(int(uni[t, 3] * mmax), mmax - 1)
-            i = 1 + min(int(uni[t, 2] * (nb - 1 - ln)), nb - 2 - ln)
-            j = i + ln - 1
-            pa = c_beads[s + i - 1]
-            pb = c_beads[s + j + 1]
-            ax = pos[pb, 0] - pos[pa, 0]
-            ay = pos[pb, 1] - pos[pa, 1]
-            az = pos[pb, 2] - pos[pa, 2]
-            nrm = math.sqrt(ax * ax + ay * ay + az * az)
-            if c_fixed[s + j + 1] - c_fixed[s + i] > 0 or nrm < 1e-9:
-                stats[kind, 1] += 1
-                continue
-            R = _rotation(ax / nrm, ay / nrm, az / nrm, crank_angle * (2.0 * uni[t, 4] - 1.0))
             for k in range(i, j + 1):
                 p = c_beads[s + k]
-                _rotate_into(pos, R, pos[pa, 0], pos[pa, 1], pos[pa, 2], p, new, m)
+                rotate_into(pos, R, pos[pa, 0], pos[pa, 1], pos[pa, 2], p, new, m)
                 idx[m] = p
                 m += 1
                 moved[p] = m
@@ -644,12 +663,12 @@ def run_chain_moves(pos, P, c_ptr, c_beads, c_fixed, mobile, cum, crank_max, cra
                 stats[kind, 1] += 1
                 continue
             theta = pivot_angle * (2.0 * uni[t, 4] - 1.0)
-            R = _rotation(gx / nrm, gy / nrm, gz / nrm, theta)
+            R = rotation_matrix(gx / nrm, gy / nrm, gz / nrm, theta)
             pc = c_beads[s + i - 1]
             m_on = 0
             for k in range(i, nb):
                 p = c_beads[s + k]
-                _rotate_into(pos, R, pos[pc, 0], pos[pc, 1], pos[pc, 2], p, new, m)
+                rotate_into(pos, R, pos[pc, 0], pos[pc, 1], pos[pc, 2], p, new, m)
                 idx[m] = p
                 m += 1
                 moved[p] = m
@@ -658,7 +677,7 @@ def run_chain_moves(pos, P, c_ptr, c_beads, c_fixed, mobile, cum, crank_max, cra
             if n_on - m_on < m_on:
                 # fewer unmoved than moved particles: search the pairs from their side
                 flip = True
-                rinv = _rotation(gx / nrm, gy / nrm, gz / nrm, -theta)  # R^T, bitwise
+                rinv = rotation_matrix(gx / nrm, gy / nrm, gz / nrm, -theta)  # R^T, bitwise
                 for c in range(3):
                     center[c] = pos[pc, c]
         else:
@@ -680,7 +699,7 @@ def run_chain_moves(pos, P, c_ptr, c_beads, c_fixed, mobile, cum, crank_max, cra
             moved[p] = 1
         # Metropolis: accept when dE <= 0 or u < exp(-dE / kT), i.e. dE < -kT ln u
         thr = -kT * math.log(uni[t, 5]) if uni[t, 5] > 0.0 else np.inf
-        dE = _delta(pos, idx[:m], new[:m], moved, kind < 2, P, H, dterm, thr, ncon, dcon,
+        dE = delta_kernel(pos, idx[:m], new[:m], moved, kind < 2, P, H, dterm, thr, ncon, dcon,
                     flip, rinv, center)
         if math.isfinite(dE) and (dE <= 0.0 or dE < thr):
             ncon += dcon[0]
@@ -694,7 +713,7 @@ def run_chain_moves(pos, P, c_ptr, c_beads, c_fixed, mobile, cum, crank_max, cra
                 pos[p, 1] = new[a, 1]
                 pos[p, 2] = new[a, 2]
                 if P.has_wca and P.w_on[p]:
-                    _hash_move(H, p, new[a, 0], new[a, 1], new[a, 2])
+                    hash_move(H, p, new[a, 0], new[a, 1], new[a, 2])
         for a in range(m):
             moved[idx[a]] = 0
     return absum

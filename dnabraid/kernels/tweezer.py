@@ -39,7 +39,14 @@ import math
 import numba
 import numpy as np
 
-from .chain import _delta, _hash_build, _hash_move, _rotate_into, _rotation, _wca_all
+from .chain import (
+    crank_proposal,
+    delta_kernel,
+    hash_build,
+    hash_move,
+    rotate_into,
+    wca_all,
+)
 
 __all__ = ["BRAID_KINDS", "catenation", "run_braid_moves"]
 
@@ -222,10 +229,10 @@ def run_braid_moves(pos, P, c_ptr, c_beads, c_fixed, mobile, wgt, center, cum, c
     ray = 1e4 * _extent(pos, b1, b2)
     cat = _catenation(pos, b1, b2, ray)
     if P.has_wca:
-        H = _hash_build(pos, P.w_on, P.cell)
+        H = hash_build(pos, P.w_on, P.cell)
     else:
-        H = _hash_build(pos[:0], P.w_on[:0], 1.0)
-    ncon = _wca_all(pos, P, H)[1] if P.has_wca else 0
+        H = hash_build(pos[:0], P.w_on[:0], 1.0)
+    ncon = wca_all(pos, P, H)[1] if P.has_wca else 0
     rinv = np.eye(3)
     cen = np.zeros(3)
     dcon = np.zeros(1, np.int64)
@@ -256,30 +263,19 @@ def run_braid_moves(pos, P, c_ptr, c_beads, c_fixed, mobile, wgt, center, cum, c
         bz = 0.0
         br2 = 0.0
         if kind == 0:
-            mmax = min(crank_max, nb - 2)
-            if mmax < 1:
+            ok, i, j, pa, pb, R, nrm = crank_proposal(pos, c_beads, c_fixed, s, nb, crank_max,
+                                                      crank_angle, uni[t, 2], uni[t, 3],
+                                                      uni[t, 4])
+            if not ok:
                 stats[kind, 1] += 1
                 continue
-            ln = 1 + min(int(uni[t, 3] * mmax), mmax - 1)
-            i = 1 + min(int(uni[t, 2] * (nb - 1 - ln)), nb - 2 - ln)
-            j = i + ln - 1
-            pa = c_beads[s + i - 1]
-            pb = c_beads[s + j + 1]
-            ax = pos[pb, 0] - pos[pa, 0]
-            ay = pos[pb, 1] - pos[pa, 1]
-            az = pos[pb, 2] - pos[pa, 2]
-            nrm = math.sqrt(ax * ax + ay * ay + az * az)
-            if c_fixed[s + j + 1] - c_fixed[s + i] > 0 or nrm < 1e-9:
-                stats[kind, 1] += 1
-                continue
-            R = _rotation(ax / nrm, ay / nrm, az / nrm, crank_angle * (2.0 * uni[t, 4] - 1.0))
             bx = 0.5 * (pos[pa, 0] + pos[pb, 0])
             by = 0.5 * (pos[pa, 1] + pos[pb, 1])
             bz = 0.5 * (pos[pa, 2] + pos[pb, 2])
             br2 = 0.25 * nrm * nrm
             for k in range(i, j + 1):
                 p = c_beads[s + k]
-                _rotate_into(pos, R, pos[pa, 0], pos[pa, 1], pos[pa, 2], p, new, m)
+                rotate_into(pos, R, pos[pa, 0], pos[pa, 1], pos[pa, 2], p, new, m)
                 dx = pos[p, 0] - bx
                 dy = pos[p, 1] - by
                 dz = pos[p, 2] - bz
@@ -366,7 +362,7 @@ def run_braid_moves(pos, P, c_ptr, c_beads, c_fixed, mobile, wgt, center, cum, c
                         m += 1
                         moved[p] = m
         thr = -kT * math.log(uni[t, 5]) if uni[t, 5] > 0.0 else np.inf
-        dE = _delta(pos, idx[:m], new[:m], moved, rigid, P, H, dterm, thr, ncon, dcon, False,
+        dE = delta_kernel(pos, idx[:m], new[:m], moved, rigid, P, H, dterm, thr, ncon, dcon, False,
                     rinv, cen)
         ok = math.isfinite(dE) and (dE <= 0.0 or dE < thr)
         if ok:
@@ -401,7 +397,7 @@ def run_braid_moves(pos, P, c_ptr, c_beads, c_fixed, mobile, wgt, center, cum, c
                 pos[p, 1] = new[a, 1]
                 pos[p, 2] = new[a, 2]
                 if P.has_wca and P.w_on[p]:
-                    _hash_move(H, p, new[a, 0], new[a, 1], new[a, 2])
+                    hash_move(H, p, new[a, 0], new[a, 1], new[a, 2])
         for a in range(m):
             moved[idx[a]] = 0
     return absum, cat

@@ -72,6 +72,20 @@ GUARD_REL = 1e-6
 GUARD_ABS_PN_NM = 1e-3
 
 
+def kind_weights(weights, amps, guard_every: int) -> np.ndarray:
+    """The proposal weights of the move kinds, zero for a kind without amplitude; checks
+    them and the guard interval (ValueError)."""
+    w = np.array([float(x) for x in weights], float)
+    if w.shape != (len(amps),) or np.any(w < 0):
+        raise ValueError(f"weights must be {len(amps)} numbers >= 0")
+    w = np.where(np.array(amps) > 0, w, 0.0)
+    if w.sum() <= 0:
+        raise ValueError("no move kind has both a weight and an amplitude")
+    if guard_every < 0:
+        raise ValueError("guard_every must be >= 0")
+    return w
+
+
 class ChainMoves:
     """Metropolis crankshaft, pivot and bead moves of open chains (module docstring); the
     interface of :class:`dnabraid.run.moves.RigidMoves` (``restart``, ``attempt``,
@@ -122,14 +136,7 @@ class ChainMoves:
             raise ValueError("crank_angle_rad and pivot_angle_rad must be <= pi")
         if crank_max_beads < 1:
             raise ValueError("crank_max_beads must be >= 1")
-        w = np.array([float(x) for x in weights], float)
-        if w.shape != (3,) or np.any(w < 0):
-            raise ValueError("weights must be 3 numbers >= 0")
-        w = np.where(np.array(amps) > 0, w, 0.0)
-        if w.sum() <= 0:
-            raise ValueError("no move kind has both a weight and an amplitude")
-        if guard_every < 0:
-            raise ValueError("guard_every must be >= 0")
+        w = kind_weights(weights, amps, guard_every)
         self._energy = energy
         self.kT = float(kT_pN_nm)
         self.moves_per_call = int(moves_per_call)
@@ -327,14 +334,7 @@ class BraidMoves(ChainMoves):
         chains = [np.asarray(c, np.int64) for c in chains]
         if len(chains) != 2 or any(len(c) < 2 for c in chains):
             raise ValueError("BraidMoves needs two strands of >= 2 beads")
-        w = np.array([float(x) for x in weights], float)
-        if w.shape != (4,) or np.any(w < 0):
-            raise ValueError("weights must be 4 numbers >= 0")
-        w = np.where(np.array(amps) > 0, w, 0.0)
-        if w.sum() <= 0:
-            raise ValueError("no move kind has both a weight and an amplitude")
-        if guard_every < 0:
-            raise ValueError("guard_every must be >= 0")
+        w = kind_weights(weights, amps, guard_every)
         self._energy = energy
         self.kT = float(kT_pN_nm)
         self.moves_per_call = int(moves_per_call)
