@@ -15,7 +15,7 @@ import pytest
 
 from dnabraid.geometry.curves import catenation_number
 from dnabraid.kernels import TERMS, LocalEnergy
-from dnabraid.kernels.tweezer import catenation
+from dnabraid.kernels.braid_moves import catenation
 from dnabraid.run.chain_moves import BraidMoves
 from dnabraid.run.engine import Engine
 from dnabraid.scenes import make_scene

@@ -49,8 +49,8 @@ from collections.abc import Callable
 
 import numpy as np
 
+from ..kernels.braid_moves import BRAID_KINDS, run_braid_moves
 from ..kernels.chain import NTERMS, TERMS, LocalEnergy, run_chain_moves
-from ..kernels.tweezer import BRAID_KINDS, run_braid_moves
 from .moves import MoveStats
 
 __all__ = ["BraidMoves", "ChainMoves", "KINDS", "BRAID_KINDS", "GUARD_REL", "GUARD_ABS_PN_NM"]
@@ -214,7 +214,8 @@ class ChainMoves:
                 st.accepted += int(d[r, 2])
         return terms, float(absum)
 
-    def attempt(self, get_pos: Callable, set_pos: Callable, energy_fn: Callable) -> None:
+    def attempt(self, get_pos: Callable, set_pos: Callable, energy_fn: Callable, *,
+                parameters: dict | None = None) -> None:
         """``moves_per_call`` Metropolis proposals on one replica.
 
         ``get_pos()`` / ``set_pos(p)`` read and write the replica's positions (its own
@@ -226,7 +227,7 @@ class ChainMoves:
         RuntimeError
             When the guard finds the local energies and the engine's disagree.
         """
-        self._sync_trap(energy_fn)
+        self._sync_trap(parameters)
         pos = np.array(get_pos(), np.float64, copy=True, order="C")
         check = self.guard_every > 0 and self._calls % self.guard_every == 0
         self._calls += 1
@@ -241,16 +242,17 @@ class ChainMoves:
             self._guard(e0, t0, float(energy_fn()), self.energy.total_terms(pos), terms,
                         absum)
 
-    def _sync_trap(self, energy_fn) -> None:
-        """Give the kernels the engine's current trap angle (the protocol sets
-        ``trap_angle`` in the Context; the System's default is not it). The engine is
-        found as the owner of the bound method ``energy_fn`` (``engine.energy_pN_nm``)."""
+    def _sync_trap(self, parameters: dict | None) -> None:
+        """Give the kernels the Context's current trap angle (the protocol sets
+        ``trap_angle`` in the Context; the System's default is not it): ``parameters`` are
+        the Context's global parameters, which the run layer hands to every call."""
         le = self.energy
         if le.trap_angle is None:
             return
-        ctx = getattr(getattr(energy_fn, "__self__", None), "context", None)
-        if ctx is not None:
-            le.set_trap_angle(ctx.getParameter("trap_angle"))
+        if parameters is None or "trap_angle" not in parameters:
+            raise RuntimeError("BraidMoves needs the Context's trap_angle: call attempt(..., "
+                               "parameters=engine.parameters())")
+        le.set_trap_angle(parameters["trap_angle"])
 
     def _guard(self, e0, t0, e1, t1, terms, absum) -> None:
         acc = ", ".join(f"{k} {st.accepted}" for k, st in self.stats.items())
@@ -288,7 +290,7 @@ class ChainMoves:
 
 
 class BraidMoves(ChainMoves):
-    """Metropolis moves of a braid (:mod:`dnabraid.kernels.tweezer`): crankshafts inside
+    """Metropolis moves of a braid (:mod:`dnabraid.kernels.braid_moves`): crankshafts inside
     each strand, single-particle moves, the ``shear`` of the top (bead centre and
     attachments translated by d, strand bead k by d k / (beads - 1): the pendulum mode)
     and the ``twist`` (the same weights, turned about the vertical axis through the bead

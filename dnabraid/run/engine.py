@@ -312,6 +312,10 @@ class Engine:
     def set_positions(self, pos_nm) -> None:
         self.context.setPositions(np.asarray(pos_nm) * u.nanometer)
 
+    def parameters(self) -> dict:
+        """The Context's global parameters now (name -> value, OpenMM units)."""
+        return {k: float(v) for k, v in self.context.getParameters().items()}
+
     def set_parameter(self, name: str, value: float) -> None:
         self.context.setParameter(name, float(value))
 

@@ -210,7 +210,8 @@ class RigidMoves:
             new[g] = (pos[g] - c) @ R.T + c
         return kind, new
 
-    def attempt(self, get_pos: Callable, set_pos: Callable, energy: Callable) -> None:
+    def attempt(self, get_pos: Callable, set_pos: Callable, energy: Callable, *,
+                parameters: dict | None = None) -> None:
         """``moves_per_call`` Metropolis proposals on one replica.
 
         ``get_pos()`` / ``set_pos(p)`` read and write the replica's positions (its own
@@ -263,4 +264,4 @@ def apply_moves(engine, members) -> None:
             full[m.sl] = np.asarray(p, float) + m.offset
             engine.set_positions(full)
 
-        mv.attempt(get_pos, set_pos, engine.energy_pN_nm)
+        mv.attempt(get_pos, set_pos, engine.energy_pN_nm, parameters=engine.parameters())
