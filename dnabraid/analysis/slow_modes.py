@@ -291,10 +291,10 @@ def linear_model(scene, sample_dt_ns: float, frame_dt_ns: float, *,
     L = scene.length_nm
     zeta_phys = units.stokes_friction(scene.bead_radius_nm)
     out: dict = {}
-    name = scene.name
-    if name in ("tether", "plectoneme"):
+    twisted = scene.torsionally_constrained
+    if scene.strands == 1:
         zeta_end = max(zeta, scene.bead_friction_factor * zeta_phys)
-        if name == "plectoneme":
+        if twisted:
             zeta_end += zeta  # the orientation particle m moves with the attachment
         m = Lin1D()
         idx, ext = chain(m, N, b, F, kappa, zeta, zeta_end)
@@ -323,7 +323,7 @@ def linear_model(scene, sample_dt_ns: float, frame_dt_ns: float, *,
         out["extension_formula_ns"] = extension_formula(zl, L, F, d.kT, scene.persistence_nm,
                                                         scene.stretch_modulus_pN, 0.5)
         out["zeta_end"] = zeta_end
-        if name == "plectoneme":
+        if twisted:
             tm, bead = twist_model(scene, d)
             lam, V = tm.modes()
             gt = np.zeros(len(tm.zeta))

@@ -187,6 +187,7 @@ class Braid(TurnedScene):
 
     #: every turn value, n = 0 included, gets a built (overdispersed) start of its own
     builds_turned_start: ClassVar[bool] = True
+    strands: ClassVar[int] = 2
 
     @property
     def noise_sign(self):

@@ -52,6 +52,7 @@ class Plectoneme(TurnedScene):
     help: ClassVar[str] = ("one torsionally constrained DNA molecule between surface and bead "
                            "under force, turned n times: extension and torque against turns "
                            "(the hat curve), buckling, twist, writhe and plectonemes")
+    torsionally_constrained: ClassVar[bool] = True
 
     force_pN: float = key(1.0, "pN", "constant force pulling the magnetic bead up (> 0)")
     length_nm: float = key(300.0, "nm", "contour length of the DNA molecule")

@@ -113,6 +113,10 @@ class TweezerScene(ThermalScene):
 
     #: True when the strands must not pass through each other whatever their length.
     needs_passage_barrier: ClassVar[bool] = False
+    #: DNA molecules between surface and bead (1: tether, plectoneme; 2: braid).
+    strands: ClassVar[int] = 1
+    #: True when the DNA is torsionally constrained (twist frames; the plectoneme).
+    torsionally_constrained: ClassVar[bool] = False
 
     def validate(self) -> None:
         need = self.need
