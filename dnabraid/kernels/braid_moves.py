@@ -40,6 +40,7 @@ import numba
 import numpy as np
 
 from .chain import (
+    ball_proposal,
     crank_proposal,
     delta_kernel,
     hash_build,
@@ -286,18 +287,11 @@ def run_braid_moves(pos, P, c_ptr, c_beads, c_fixed, mobile, wgt, center, cum, c
             lo = i  # changed segments of the extended strand: i .. j + 1
             hi = j + 1
         elif kind == 1:
-            gx = gau[t, 0]
-            gy = gau[t, 1]
-            gz = gau[t, 2]
-            nrm = math.sqrt(gx * gx + gy * gy + gz * gz)
-            if nmob == 0 or nrm == 0.0:
+            p = ball_proposal(pos, mobile, nmob, bead_nm, gau[t, 0], gau[t, 1], gau[t, 2],
+                              uni[t, 2], uni[t, 3], new)
+            if p < 0:
                 stats[kind, 1] += 1
                 continue
-            p = mobile[min(int(uni[t, 2] * nmob), nmob - 1)]
-            rad = bead_nm * uni[t, 3] ** (1.0 / 3.0) / nrm
-            new[0, 0] = pos[p, 0] + rad * gx
-            new[0, 1] = pos[p, 1] + rad * gy
-            new[0, 2] = pos[p, 2] + rad * gz
             idx[0] = p
             m = 1
             moved[p] = 1

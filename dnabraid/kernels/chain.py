@@ -528,6 +528,23 @@ def rotation_matrix(ax, ay, az, theta):
 
 
 @numba.njit(cache=True)
+def ball_proposal(pos, mobile, nmob, bead_nm, gx, gy, gz, u_pick, u_rad, new):
+    """A single-particle proposal: a mobile particle (from ``u_pick``) displaced uniformly in
+    the ball of radius ``bead_nm`` (direction from the Gaussian (gx, gy, gz), radius
+    bead_nm u^(1/3)): symmetric. Writes the new position into ``new[0]``; returns the
+    particle, or -1 when there is none to move."""
+    nrm = math.sqrt(gx * gx + gy * gy + gz * gz)
+    if nmob == 0 or nrm == 0.0:
+        return -1
+    p = mobile[min(int(u_pick * nmob), nmob - 1)]
+    rad = bead_nm * u_rad ** (1.0 / 3.0) / nrm
+    new[0, 0] = pos[p, 0] + rad * gx
+    new[0, 1] = pos[p, 1] + rad * gy
+    new[0, 2] = pos[p, 2] + rad * gz
+    return p
+
+
+@numba.njit(cache=True)
 def crank_proposal(pos, c_beads, c_fixed, s, nb, crank_max, crank_angle, u_pos, u_len, u_ang):
     """A crankshaft proposal on the strand whose beads are ``c_beads[s:s + nb]``: an arc
     i..j of 1 ... ``crank_max`` beads (never the strand's first or last bead) turned by an
@@ -682,18 +699,11 @@ def run_chain_moves(pos, P, c_ptr, c_beads, c_fixed, mobile, cum, crank_max, cra
                     center[c] = pos[pc, c]
         else:
             # one bead displaced uniformly in a ball
-            gx = gau[t, 0]
-            gy = gau[t, 1]
-            gz = gau[t, 2]
-            nrm = math.sqrt(gx * gx + gy * gy + gz * gz)
-            if nmob == 0 or nrm == 0.0:
+            p = ball_proposal(pos, mobile, nmob, bead_nm, gau[t, 0], gau[t, 1], gau[t, 2],
+                              uni[t, 2], uni[t, 3], new)
+            if p < 0:
                 stats[kind, 1] += 1
                 continue
-            p = mobile[min(int(uni[t, 2] * nmob), nmob - 1)]
-            rad = bead_nm * uni[t, 3] ** (1.0 / 3.0) / nrm
-            new[0, 0] = pos[p, 0] + rad * gx
-            new[0, 1] = pos[p, 1] + rad * gy
-            new[0, 2] = pos[p, 2] + rad * gz
             idx[0] = p
             m = 1
             moved[p] = 1
