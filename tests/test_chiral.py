@@ -1,5 +1,5 @@
-"""The chiral interaction (issue 4): twin, finite differences, mirror, normalisation, sign,
-pair search, apolar fold and cutoff continuity; its range (issue 14 item 6).
+"""The chiral interaction: twin, finite differences, mirror, normalisation, sign,
+pair search, apolar fold and cutoff continuity; its range (docs/chiral_range.md).
 
 Tolerances: OpenMM (Reference platform, double) against the numpy twin 1e-9 relative;
 finite differences (central, h = 1e-6 nm) 1e-6 relative; the mirror image flips the sign of
@@ -206,7 +206,7 @@ def test_weight_vanishes_smoothly_at_cutoff():
     assert np.trapezoid(k.weight(np.hypot(DELTA, v))[0], v) == pytest.approx(1.0, rel=1e-6)
 
 
-# --- the range (issue 14 item 6) ----------------------------------------------------------
+# --- the range (docs/chiral_range.md) ----------------------------------------------------------
 
 #: (salt mM, effective diameter nm of forcefields/dna.toml) at three salts.
 RANGE_SALTS = [(10.0, 15.0), (150.0, 4.9), (1000.0, 2.9)]

@@ -3,7 +3,7 @@ continuum closed ply, and the scene's refusals.
 
 Continuum: :mod:`dnabraid.continuum.closed_ply` (uniform closed ply with the axis-curvature
 correction: eta_mean to O(eps^2), mean pressure by virtual work on the torus family, writhe
-per ring). Seed: van der Heijden, "Equilibrium theory of elastic braids" (seed 000), slides
+per ring). Seed: van der Heijden, "Equilibrium theory of elastic braids" (van der Heijden, elastic braids), slides
 19-23.
 """
 

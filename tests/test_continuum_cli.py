@@ -1,4 +1,4 @@
-"""`dnabraid continuum ply|knot|overhand|tweezer [--json]` (issue 3, item 5)."""
+"""`dnabraid continuum ply|knot|overhand|tweezer [--json]`."""
 
 import json
 
@@ -20,8 +20,8 @@ def test_knot_json_has_the_promised_keys(capsys):
                 "isolated_contact_at", "success", "wall_time_s"):
         assert key in d, key
     assert d["success"] is True
-    assert d["w_c"] == pytest.approx(3.506, abs=0.002)  # seed 002, Eq. 7
-    assert d["sigma"] == pytest.approx(0.492, abs=0.002)  # seed 002, Eq. 8
+    assert d["w_c"] == pytest.approx(3.506, abs=0.002)  # Audoly et al. 2007, Eq. 7
+    assert d["sigma"] == pytest.approx(0.492, abs=0.002)  # Audoly et al. 2007, Eq. 8
 
 
 @pytest.mark.parametrize("argv, key", [

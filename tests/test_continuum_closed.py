@@ -1,4 +1,4 @@
-"""Closed two-ply (seed 000, slides 19-23): uniform torus links/knots and the axis correction.
+"""Closed two-ply (van der Heijden, elastic braids, slides 19-23): uniform torus links/knots and the axis correction.
 
 Every number asserted comes from an independent computation (the discretised torus curves
 through :mod:`dnabraid.geometry.curves`, the open-ply module, an exact quadrature of the torus

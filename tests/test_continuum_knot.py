@@ -1,4 +1,4 @@
-"""Knot braid difference problem (seed 002, Audoly et al. PRL 2007, Eqs. 1, 5-9)."""
+"""Knot braid difference problem (Audoly et al. 2007, Audoly et al. PRL 2007, Eqs. 1, 5-9)."""
 
 from __future__ import annotations
 
@@ -44,7 +44,7 @@ def test_trefoil_converges(trefoil):
 
 
 def test_trefoil_crossing(trefoil):
-    # seed 002: w_c = 3.506 (Eq. 7); here 3.5057 converged, 3.506 +- 0.0006 at dw = 0.005
+    # Audoly et al. 2007: w_c = 3.506 (Eq. 7); here 3.5057 converged, 3.506 +- 0.0006 at dw = 0.005
     assert trefoil["w_c"] == pytest.approx(3.506, abs=1e-3)
 
 
@@ -104,9 +104,9 @@ def test_continuation_refines_mesh():
 
 
 def test_cinquefoil_crossing():
-    # seed 002: 7.640; seed 001 (Jawed et al.) quotes 7.60.  Converged: 7.640 +- 0.001
+    # Audoly et al. 2007: 7.640; Jawed et al. (2015) quotes 7.60.  Converged: 7.640 +- 0.001
     # (nested meshes 7.6388, 7.6407, 7.6398, 7.6402 at dw = 0.02 ... 0.0025; phase means
-    # 7.6402 and 7.6407 at dw = 0.02, 0.01): seed 002 is right, 7.60 is 0.04 too small.
+    # 7.6402 and 7.6407 at dw = 0.02, 0.01): Audoly et al. 2007 is right, 7.60 is 0.04 too small.
     res = knot_braid.solve_knot(2, n_grid=int(round(knot_braid.default_half_width(2) / 0.01)))
     assert res.success, res.message
     assert res["w_c"] == pytest.approx(knot_braid.W_C_CINQUEFOIL, abs=3e-3)

@@ -1,4 +1,4 @@
-"""Long overhand knots (seed 001, Jawed et al. PRL 2015): helical braid, loop elastica, Eq. (5)."""
+"""Long overhand knots (Jawed et al. 2015, Jawed et al. PRL 2015): helical braid, loop elastica, Eq. (5)."""
 
 from __future__ import annotations
 

@@ -85,7 +85,7 @@ def test_openmm_system_is_the_same_energy(rod):
 
 
 #: Tolerance on the spread |tight - loose| / mean of 2 T R^2 / B between the two starts
-#: (issue 14, item 1: "the two starts within 2 % of each other").
+#: (found 2026-11-30: "the two starts within 2 % of each other").
 BAND_SPREAD = 0.02
 
 
@@ -120,7 +120,7 @@ def test_trefoil_band_collapses_with_segment_contact():
     # measured spreads 0.0008 and 0.0001
     assert _spread(band, "tension_ratio_dL") < BAND_SPREAD
     assert _spread(band, "tension_ratio_curvature") < BAND_SPREAD
-    # continuum (seed 002, Eq. 1 and 7) is the leading order in eps; at eps = 0.3 the
+    # continuum (Audoly et al. 2007, Eq. 1 and 7) is the leading order in eps; at eps = 0.3 the
     # braid is 2 sqrt(2) w_c eps = 3 loop radii long, so the corrections are large:
     # measured 2TR_dL^2/B = 1.54, l / l_theory = 0.73 (workflows/results/knot_band.md shows
     # them shrinking with eps). Characterisation bands round those numbers:
@@ -130,7 +130,7 @@ def test_trefoil_band_collapses_with_segment_contact():
 
 @pytest.mark.slow
 def test_trefoil_band_at_eps_02_converges_towards_the_seed_law():
-    """eps = 0.2, b = h/2 (issue 14, item 1 "Must show"): the two starts within 2 %, and the
+    """eps = 0.2, b = h/2 (the 2026-11-30 check): the two starts within 2 %, and the
     deviation from T = EI / (2 R_dL^2) (Audoly, Clauvelin & Neukirch 2007, Eq. 1) smaller
     than at eps = 0.3 (the theory is the eps -> 0 limit). The 5 % target against Eq. 1 at
     eps = 0.2 is NOT met: measured 2TR_dL^2/B = 1.29 (b = h/2 and h/4 alike)."""

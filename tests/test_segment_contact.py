@@ -1,6 +1,6 @@
 """Segment-segment contact (dnabraid.forces.segment_contact): closest distance against brute
 force, gradient and Hessian against finite differences, the OpenMM force against the numpy
-twin, the pair search and its exclusions, and the smoothness that motivates it (issue 14)."""
+twin, the pair search and its exclusions, and the smoothness that motivates it."""
 
 import numpy as np
 import pytest
@@ -204,7 +204,7 @@ def test_straight_strands_slide_without_corrugation():
     along its axis by 0 ... b: the closest *segment* distance is d0 throughout (the tube
     round a straight polyline is a cylinder), while the closest *bead* distance ripples
     between d0 and sqrt(d0^2 + (b/2)^2 + (b/2)^2) (crossing midway between beads on both):
-    the corrugation that pins bead-contact knots (issue 14, item 1)."""
+    the corrugation that pins bead-contact knots."""
     b, d0, n = 0.5, 2.0, 41
     z = b * (np.arange(n) - n // 2) + 0.5 * b  # crossing point midway between two beads
     A = np.column_stack([z, np.zeros(n), np.zeros(n)])

@@ -13,7 +13,7 @@ workflows/results/benchmark_chiral.txt. Times are CPU time of this process
 time; pin it to one core (taskset -c 0).
 
 ``--range helix`` (default) uses the chiral weight's range rho = 1/sqrt(lambda_D^-2 + g^2)
-(0.446 nm at 150 mM; issue 14 item 6); ``--range debye`` the Debye length (0.785 nm), the
+(0.446 nm at 150 mM; docs/chiral_range.md); ``--range debye`` the Debye length (0.785 nm), the
 range before that fix, for comparison (docs/chiral_range.md).
 
 Usage: python workflows/benchmark_chiral.py [--steps 2000] [--range helix|debye] [--out F]
@@ -123,7 +123,7 @@ def main(argv=None):
                                          / "benchmark_chiral.txt"))
     ap.add_argument("--range", choices=("helix", "debye"), default="helix",
                     help="decay length of the weight: 1/sqrt(lambda_D^-2 + g^2) (default) or "
-                         "the Debye length (before issue 14 item 6)")
+                         "the Debye length (before the range of the first helical harmonic (docs/chiral_range.md))")
     args = ap.parse_args(argv)
     sp = salt_parameters(SALT_MM)
     delta, lam = sp.diameter_nm, sp.debye_nm

@@ -1,4 +1,4 @@
-"""Replicas in one OpenMM Context against one Context per replica (issue 13, item 3).
+"""Replicas in one OpenMM Context against one Context per replica.
 
 R non-interacting copies of a scene's System are packed into one System
 (:func:`dnabraid.run.packing.replicate_system`, which `dnabraid run` uses since 2026-12-01, key

@@ -1,4 +1,4 @@
-"""Continuum reference for closed braids (issue 14, item 4): links n = 1..5, knots (3,2)..(9,2).
+"""Continuum reference for closed braids: links n = 1..5, knots (3,2)..(9,2).
 
 For each case at Delta/L = 0.02: the uniform closed ply, the torus helix corrected to
 O(eps^2), and the relaxed (Ritz) ply of :func:`dnabraid.continuum.closed_ply.relax_closed_ply`,

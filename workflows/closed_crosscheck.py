@@ -1,5 +1,5 @@
 """Closed braids at zero temperature (scene ``closed``) against the continuum closed ply and the
-seed's slides 19-23 (van der Heijden, "Equilibrium theory of elastic braids", seed 000).
+seed's slides 19-23 (van der Heijden, "Equilibrium theory of elastic braids").
 
 Tables written to workflows/results/closed.md (+ closed.json, figures closed_*.png):
   1. the 4-link at Delta/L = 0.02: bead-spacing convergence b = h/2, h/4, h/8 (h = Delta/2)
@@ -102,7 +102,7 @@ def write_md(rows: dict) -> None:
          "~Delta of strand (removes the bead-scale corrugation); means are per bead. "
          "Continuum: dnabraid.continuum.closed_ply.closed_ply (eta_mean to O(eps^2); p_mean by "
          "virtual work on the torus family; p0 = B sin^4/r^3 the straight torque-free ply). "
-         "Seed: van der Heijden, 'Equilibrium theory of elastic braids' (seed 000). Wall "
+         "Seed: van der Heijden, 'Equilibrium theory of elastic braids' (van der Heijden, elastic braids). Wall "
          "times: a shared 2-core machine running other jobs (load 7-18); they vary ~3x "
          "between runs.", ""]
 

@@ -1,4 +1,4 @@
-"""Trefoil band collapse with the smooth (segment) contact (issue 14, item 1).
+"""Trefoil band collapse with the smooth (segment) contact.
 
 For each (eps, b, contact) the open trefoil is relaxed (damped Newton,
 dnabraid.statics.open_knot.relax) from a tight start (loop 0.8 x sqrt(B/2T): the knot loosens) and a loose one (1.25 x: it
@@ -86,7 +86,7 @@ def main(argv=None) -> int:
 
 
 def _write_md(out, rows) -> None:
-    lines = [f"# trefoil band (issue 14, item 1), {time.strftime('%Y-%m-%d %H:%M')}", "",
+    lines = [f"# trefoil band, {time.strftime('%Y-%m-%d %H:%M')}", "",
              f"h = {H_NM} nm, B = {B_PN_NM2} pN nm^2, T = B eps^4 / (2 h^2); tails "
              "1.5 sqrt(B/T); contact k = 2000 pN/nm; starts: loop 0.8 (tight) and 1.25 "
              "(loose) x sqrt(B/2T). Columns 2TR^2/B for R = Delta L / 2pi (dL), half the "

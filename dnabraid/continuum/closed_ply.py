@@ -1,4 +1,4 @@
-"""Closed two-ply: torus links and torus knots in hard contact (seed 000, slides 19-23).
+"""Closed two-ply: torus links and torus knots in hard contact (van der Heijden, elastic braids, slides 19-23).
 
 Everything here is scale free: lengths in units of the strand length ``L``, the pressure
 (contact force per unit strand length) in ``B/L^3``, forces in ``B/L^2``, moments in ``B/L``,

@@ -13,14 +13,14 @@ import importlib
 #: problem name -> (module, one-line help)
 PROBLEMS = {
     "ply": ("ply", "two-ply in hard contact: uniform plies and the ply with ends "
-                   "(seed 000, slides 15-19)"),
+                   "(van der Heijden, elastic braids, slides 15-19)"),
     "knot": ("knot_braid", "braid of an open elastic knot: the difference problem, w_c, sigma "
-                     "(seed 002, Eqs. 5-9)"),
+                     "(Audoly et al. 2007, Eqs. 5-9)"),
     "overhand": ("overhand", "long overhand knots: helical braid, loop elastica g, master "
-                             "curve (seed 001)"),
+                             "curve (Jawed et al. 2015)"),
     "tweezer": ("tweezer", "two molecules braided in magnetic tweezers: z(n), torque(n)"),
     "closed": ("closed_ply", "closed two-ply (torus links and knots): uniform, axis-curvature "
-                         "correction, relaxed equilibrium (seed 000, slides 19-23)"),
+                         "correction, relaxed equilibrium (van der Heijden, elastic braids, slides 19-23)"),
 }
 
 

@@ -1,6 +1,6 @@
 """Loose elastic knots: the braid's "difference problem" (Audoly, Clauvelin & Neukirch 2007).
 
-Setting (seed 002, Eqs. 1-9)
+Setting (Audoly et al. 2007, Eqs. 1-9)
 ----------------------------
 An infinitely long rod (radius ``h``, bending stiffness ``EI``) tied into an open
 ``(2n+1)_1`` torus knot (``n = 1`` trefoil, ``n = 2`` cinquefoil, ...) and pulled by a
@@ -72,7 +72,7 @@ i.e. ``sigma = int_{-W}^{W} f dw / (2 sqrt(2))``, point forces (at the ends of t
 contact region and at the isolated contacts) included.  On the half grid (node 0 has weight
 1/2) ``int f dw = 2 sum_i lambda_i`` and ``sigma = sum_i lambda_i / sqrt(2)``.
 
-Numbers (trefoil; this module vs seed 002)
+Numbers (trefoil; this module vs Audoly et al. 2007)
 ------------------------------------------
 First-order Richardson extrapolation of nested meshes ``dw = 0.005, 0.0025`` (see
 ``convergence_table``) / of phase means at ``dw = 0.01, 0.005`` (``solve_knot_averaged``);
@@ -84,7 +84,7 @@ A single solve at the default ``dw = 0.005`` is within 6e-4 of these (2e-3 for t
 half-width).  The central contact carries a density ``f ~ 0.24`` plus a point force 0.17
 at each end; the isolated contact a point force 0.44 (``int f dw = 1.393``).
 
-**Cinquefoil.**  Seed 002 prints ``w_c = 7.640``, seed 001 (Jawed et al.) quotes 7.60.  The
+**Cinquefoil.**  Audoly et al. (2007) prints ``w_c = 7.640``, Jawed et al. (2015) quotes 7.60.  The
 converged difference problem gives ``w_c = 7.640 +- 0.001`` (7.6388, 7.6407, 7.6398, 7.6402
 on nested meshes ``dw = 0.02 ... 0.0025``, phase means 7.6402 and 7.6407 at 0.02 and 0.01),
 so the seed-002 value is right and 7.60 is 0.04 too small.  For ``n >= 2`` the solution is
@@ -116,16 +116,16 @@ from dnabraid.continuum._validate import check_n, check_nonnegative, check_posit
 
 logger = logging.getLogger(__name__)
 
-#: Seed 002's trefoil numbers (rescaled units of Eq. 4).
+#: Audoly et al. (2007)'s trefoil numbers (rescaled units of Eq. 4).
 SEED_TREFOIL = {"w_c": 3.506, "contact_half_width": 0.348, "max_gap": 0.021,
                 "max_gap_at": 1.823, "isolated_contact_at": 2.681, "sigma": 0.492}
-#: Apparent-crossing abscissa of the trefoil, seed 002 (Eq. 7 and text).
+#: Apparent-crossing abscissa of the trefoil, Audoly et al. 2007 (Eq. 7 and text).
 W_C_TREFOIL = 3.506
-#: Cinquefoil ``w_c`` printed in seed 002 (confirmed by this module: 7.640 +- 0.001).
+#: Cinquefoil ``w_c`` printed in Audoly et al. 2007 (confirmed by this module: 7.640 +- 0.001).
 W_C_CINQUEFOIL = 7.640
-#: Cinquefoil ``w_c`` quoted in seed 001 (Jawed et al.); 0.04 below the converged value.
+#: Cinquefoil ``w_c`` quoted in Jawed et al. (2015); 0.04 below the converged value.
 W_C_CINQUEFOIL_SEED001 = 7.60
-#: Total contact force constant of the trefoil, seed 002 (Eq. 8).
+#: Total contact force constant of the trefoil, Audoly et al. 2007 (Eq. 8).
 SIGMA_TREFOIL = 0.492
 #: Default grid spacing of the finest mesh (rescaled units).
 DEFAULT_SPACING = 0.005

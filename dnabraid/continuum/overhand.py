@@ -1,4 +1,4 @@
-"""Long overhand knots in elastic rods: helical braid, loop elastica and master curve (seed 001).
+"""Long overhand knots in elastic rods: helical braid, loop elastica and master curve (Jawed et al. 2015).
 
 Source: Jawed, Dieleman, Audoly & Reis, "Untangling the mechanics and topology in the
 frictional response of long overhand elastic knots", PRL 115, 118302 (2015) -- the *seed*,
@@ -92,7 +92,7 @@ C5_FORCE = 96.0 * math.sqrt(3.0) * math.pi**2
 #: Frictionless balance ``F R^2/B = 1/2`` of the braid (seed, discussion of Fig. 1(f)).
 FRICTIONLESS_FR2_OVER_B = 0.5
 #: Exact braid lengths ``w_c`` of the difference problem, Audoly, Clauvelin & Neukirch, PRL 99,
-#: 164301 (2007), Eq. after (5) (seed 002): trefoil (n = 1) and cinquefoil (n = 2).
+#: 164301 (2007), Eq. after (5) (Audoly et al. 2007): trefoil (n = 1) and cinquefoil (n = 2).
 W_C_EXACT_ACN2007 = {1: 3.506, 2: 7.640}
 #: The same as quoted (rounded) in the seed (Jawed et al. 2015): "3.51" and "7.60".  The 7.60
 #: differs from ACN2007's 7.640; both are kept so tests can check the seed's claim as printed.

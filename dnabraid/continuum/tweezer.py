@@ -1,4 +1,4 @@
-"""Tweezer braid: two nicked rods between surface and bead, turned ``n`` times (issue 3, part 4).
+"""Tweezer braid: two nicked rods between surface and bead, turned ``n`` times.
 
 Model (zero temperature, no ``kT``)
 -----------------------------------

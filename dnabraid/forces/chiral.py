@@ -45,7 +45,7 @@ PythonForce costs ~25-50 us per step even when it does nothing (OpenMM calling P
 copying the state); that floor is most of the chiral cost of a small braid out of contact
 (the braid scene, 2 x 31 beads: 0.11-0.14 against 0.07 ms per step without the term).
 These numbers were measured with the Debye length as the weight's range (cutoff Delta +
-6 lambda_D); with the range of the first helical harmonic (issue 14 item 6) the cutoff and
+6 lambda_D); with the range of the first helical harmonic (docs/chiral_range.md) the cutoff and
 the candidate list shrink while the default q can grow (finer sampling of a narrower
 weight): docs/chiral_range.md has both, measured side by side.
 """

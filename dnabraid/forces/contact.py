@@ -13,7 +13,7 @@ def contact_exclusion_range(thickness_nm: float, bead_spacing_nm: float) -> int:
     """Beads at most this many apart along the rod do not interact.
 
     A rod of radius h bent to radii >> h holds beads k apart at distance ~ k b, so pairs
-    closer than ~2.5 h along the contour are neighbours, not contacts (seed 002, Eq. 3:
+    closer than ~2.5 h along the contour are neighbours, not contacts (Audoly et al. 2007, Eq. 3:
     "|s1 - s2| / h large enough to exclude neighbouring points").
     """
     return max(1, int(math.ceil(2.5 * thickness_nm / bead_spacing_nm)))
@@ -24,7 +24,7 @@ def contact_force(n_particles: int, thickness_nm: float, k_pN_per_nm: float, *,
     """U = k/2 (2h - r)^2 for r < 2h between beads of a rod of radius h (0 beyond).
 
     The zero-temperature stand-in for the non-penetration condition |r(s1) - r(s2)| >= 2h
-    (seed 002, Eq. 3): a penalty whose overlap under a contact force f is f / k. Beads
+    (Audoly et al. 2007, Eq. 3): a penalty whose overlap under a contact force f is f / k. Beads
     closer than ``exclusion_range`` along the rod are excluded. Numpy twin:
     :func:`dnabraid.forces.reference.contact`.
     """

@@ -25,7 +25,7 @@ by a double sum over pairs of segments (and over ``q`` sample points per segment
 * The decay length rho is that of the first helical harmonic of the DNA charge pattern
   (:func:`chiral_range_nm`, Eq. C6), rho = 1/kappa_1 = 1/sqrt(lambda_D^-2 + g^2),
   g = 2 pi / H, H = 3.4 nm: 0.53 nm at 10 mM, 0.45 nm at 150 mM, 0.27 nm at 1 M (it was the
-  Debye length lambda_D, 3.04-0.30 nm, before issue 14 item 6; docs/chiral_range.md).
+  Debye length lambda_D, 3.04-0.30 nm, before the range of the first helical harmonic ; docs/chiral_range.md).
 * G(c, s) = (c^2 + s^2) tan(eta'/2) sqrt(cos eta') S(eta') / N(eta') (C3), with c = t_a . t_b,
   s = (t_a x t_b) . d, eta' = atan(s/c) = eta folded into (-pi/2, pi/2) (apolar DNA) and S a
   C2 switch from 1 at |eta'| <= eta_on (60 deg by default) to 0 at |eta'| = pi/2. The factor
@@ -170,7 +170,7 @@ class ChiralKernel:
             self._calibrate()
 
     def __setstate__(self, st):
-        # A kernel pickled before issue 14 item 6 has no ``range``: it decayed with the Debye
+        # A kernel pickled before the range of the first helical harmonic (docs/chiral_range.md) has no ``range``: it decayed with the Debye
         # length, and a restored copy keeps that weight (its amplitude and N were fitted to it).
         st.setdefault("range", st["debye"])
         st.setdefault("pitch", HELIX_PITCH_NM)

@@ -5,7 +5,7 @@ Why segments
 ------------
 A penalty between beads, ``U = k/2 (2h - r)^2`` (:mod:`dnabraid.forces.contact`), sees the
 rod as a string of spheres: two strands sliding along each other ride over bumps of period
-``b`` (the bead spacing), and the bumps' slope acts as static friction (issue 14, item 1:
+``b`` (the bead spacing), and the bumps' slope acts as static friction (found 2026-11-30:
 it pins the trefoil's loop). The non-penetration condition of the continuum rod is
 ``|r(s1) - r(s2)| >= 2h`` for all ``s1, s2`` far enough apart along the rod (Audoly,
 Clauvelin & Neukirch 2007, Eq. 3; the same condition is used by Jawed, Dieleman, Audoly &

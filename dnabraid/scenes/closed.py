@@ -2,7 +2,7 @@
 ``(2, 2n)`` torus link (Lk = -+n) or one ring tied as the ``(n, 2)`` torus knot (n odd),
 in hard frictionless contact of diameter Delta, relaxed to equilibrium.
 
-The closed braids of van der Heijden's "Equilibrium theory of elastic braids" (seed 000;
+The closed braids of van der Heijden's talk "Equilibrium theory of elastic braids" (and
 Starostin & van der Heijden, JMPS 64, 83 (2014)): torus links with Lk = -n, n = 1..5 at
 Delta/L = 0.02 (slides 19-20), the 4-link's contact pressure and braid angle (slide 21),
 torus knots (n, 2) (slide 22) and the pentafoil's pressure and contact-curve curvature
@@ -30,15 +30,15 @@ from .base import Scene, SceneError, key
 #: Largest total bead count (each Newton iteration factorises a 3N x 3N sparse matrix).
 MAX_CLOSED_BEADS = 8000
 
-#: The seed's numbers (van der Heijden, "Equilibrium theory of elastic braids", seed 000):
+#: The seed's numbers (van der Heijden, "Equilibrium theory of elastic braids"):
 #: the extreme tick labels of the seed's plot axes (the curves span a little beyond them, so
 #: they are not the data's extremes) at Delta/L = 0.02 (left-handed, Lk = -n): slide 21
 #: (4-link) and slide 23 (pentafoil; p on the ring [0, L + L2], kappa_c on [0, L]).
 SEED_VALUES = {
     ("link", 4): {"eta": (0.50910, 0.50935), "pressure": (3200.0, 3900.0),
-                  "source": "seed 000, slide 21 (4-link, Delta/L = 0.02)"},
+                  "source": "van der Heijden, elastic braids, slide 21 (4-link, Delta/L = 0.02)"},
     ("knot", 5): {"pressure": (400.0, 550.0), "contact_curvature": (6.2, 6.8),
-                  "source": "seed 000, slide 23 (pentafoil, Delta/L = 0.02)"},
+                  "source": "van der Heijden, elastic braids, slide 23 (pentafoil, Delta/L = 0.02)"},
 }
 
 

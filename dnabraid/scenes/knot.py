@@ -61,7 +61,7 @@ class Knot(Scene):
     contact: str = key("segments", "", "self-contact model: 'segments' (closest distance "
                        "between the straight segments joining the beads: a smooth tube, the "
                        "loop slides freely; default) or 'beads' (between beads: a corrugated "
-                       "surface whose static friction ~ b/(4h) pins the loop; issue 14)")
+                       "surface whose static friction ~ b/(4h) pins the loop)")
 
     def validate(self) -> None:
         need = self.need

@@ -4,7 +4,7 @@ What is built
 -------------
 Two elastic rings of length ``L`` linked as the ``(2, 2n)`` torus link (linking number
 ``Lk = -+n``), or one ring of length ``2L`` tied as the ``(n, 2)`` torus knot (``n`` odd: 3
-trefoil, 5 pentafoil, ...), as in van der Heijden's closed braids (seed 000: "Equilibrium
+trefoil, 5 pentafoil, ...), as in van der Heijden's closed braids ("Equilibrium
 theory of elastic braids", Starostin & van der Heijden, JMPS 64, 83 (2014); slides 19-23).
 ``L`` is the length of each of the braid's two strands (a knot's two strands close into each
 other, so its ring is ``2L``); ``Delta`` is the contact diameter (the strands' centre lines
@@ -224,7 +224,7 @@ def check(braid: ClosedBraid) -> None:
     if s >= math.sqrt(0.5):
         raise ValueError(f"n={braid.n}: does not fit: sin(theta) = pi n_ply Delta/L = {s:.3f} "
                          ">= sin(pi/4): the ply is past lock-up (theta = 45 deg, where its "
-                         "forces diverge: seed 000, slide 17; eta = 2 theta must stay below "
+                         "forces diverge: van der Heijden, elastic braids, slide 17; eta = 2 theta must stay below "
                          "pi/2 for closest approach, slide 5); lower n or diameter_over_length")
     R0 = braid.length_nm * math.sqrt(1 - s * s) / (2 * math.pi)
     if R0 < braid.diameter_nm:

@@ -8,13 +8,13 @@ self-contact ``U = k/2 (2h - r)^2`` for ``r < 2h``, with ``r`` the distance betw
 (:mod:`dnabraid.forces.contact`, ``contact="beads"``) or the closest distance between the
 straight segments joining them (:mod:`dnabraid.forces.segment_contact`,
 ``contact="segments"``: a smooth tube; beads make a corrugated surface whose slope acts as
-static friction, ~ b / (4h), and pins the loop: issue 14, item 1)), tied
+static friction, ~ b / (4h), and pins the loop), tied
 into an open ``(2, 2n+1)`` torus knot (``n = 1`` trefoil, ``n = 2`` cinquefoil; ``n`` is the
-unknotting number of seed 001) and pulled by a tension ``T`` at both ends. There is no
+unknotting number of Jawed et al. 2015) and pulled by a tension ``T`` at both ends. There is no
 tweezer bead, no surface, no electrostatics and no temperature: the scene leaves them out.
 The ends are held on the pulling axis (their two last beads are restrained sideways), a
 stand-in for the infinitely long straight tails of the theory; the tails are
-``tail_factor`` x ``sqrt(B/T)`` long (the decay length of their deflection, seed 002).
+``tail_factor`` x ``sqrt(B/T)`` long (the decay length of their deflection, Audoly et al. 2007).
 
 The start is the asymptotic shape itself: straight tails along z, a braid of length
 ``l0`` in which the two strands wind around each other (their half-difference turning by
@@ -31,17 +31,17 @@ OpenMM force left is reported.
 What is measured (:func:`measure`) and against which theory
 ------------------------------------------------------------
 * loop radius: ``R_dL = Delta L / (2 pi)``, the shortening over 2 pi as in the experiments
-  of seed 002 (below Eq. 9), ``R_apex`` = half the loop's largest distance from the
+  of Audoly et al. 2007 (below Eq. 9), ``R_apex`` = half the loop's largest distance from the
   axis (sensitive to the tails' length: the knot's base sits O(h) off the axis), and
-  ``R_curv`` = 1 / curvature at that apex; against ``T = EI / (2 R^2)`` (seed 002, Eq. 1,
+  ``R_curv`` = 1 / curvature at that apex; against ``T = EI / (2 R^2)`` (Audoly et al. 2007, Eq. 1,
   no friction). With frictionless contact ``H = B kappa^2 / 2 + N . t`` is conserved
   along the rod and equals ``T``, so ``R_curv`` differs from Eq. 1 by the loop's internal
   force ``N`` (zero only as eps -> 0);
 * braid length ``l``: the distance between the outermost apparent crossings of the two
-  strands seen along the loop's normal (seed 002: ``v(w_c) = 0``); against
-  ``l = 2 w_c sqrt(2 h R)`` (seed 002, Eq. 7; ``w_c`` from :mod:`dnabraid.continuum.knot_braid`);
+  strands seen along the loop's normal (Audoly et al. 2007: ``v(w_c) = 0``); against
+  ``l = 2 w_c sqrt(2 h R)`` (Audoly et al. 2007, Eq. 7; ``w_c`` from :mod:`dnabraid.continuum.knot_braid`);
 * helical wave number ``k = |d phi / dz|`` of the strands' half-difference in the middle
-  half of the braid; against ``k = (sqrt(12) h R)^(-1/2)`` (seed 001, Eq. 3);
+  half of the braid; against ``k = (sqrt(12) h R)^(-1/2)`` (Jawed et al. 2015, Eq. 3);
 * the winding of the half-difference between the outermost crossings: ``2 pi n`` for
   the ``(2, 2n+1)`` knot (a topology check).
 
@@ -66,7 +66,7 @@ from ..forces.contact import contact_exclusion_range
 from . import newton
 
 #: Self-contact models of the rod: between beads (spheres of radius h) or between the
-#: segments joining them (a tube of radius h round the polyline; see issue 14, item 1).
+#: segments joining them (a tube of radius h round the polyline).
 CONTACT_MODELS = ("beads", "segments")
 
 
@@ -95,7 +95,7 @@ class KnotRod:
 
     @property
     def radius_theory_nm(self) -> float:
-        """R of T = EI / (2 R^2) (seed 002, Eq. 1)."""
+        """R of T = EI / (2 R^2) (Audoly et al. 2007, Eq. 1)."""
         return math.sqrt(self.bending_stiffness_pN_nm2 / (2.0 * self.tension_pN))
 
     @property
@@ -112,7 +112,7 @@ class KnotRod:
 
 
 def w_c(n: int) -> float:
-    """Apparent-crossing abscissa w_c of the difference problem (seed 002; computed)."""
+    """Apparent-crossing abscissa w_c of the difference problem (Audoly et al. 2007; computed)."""
     from ..continuum import knot_braid as ck
 
     if n == 1:
@@ -126,12 +126,12 @@ _W_C_CACHE: dict = {}
 
 
 def wave_number_theory(thickness_nm: float, radius_nm: float) -> float:
-    """Helical wave number of a long knot's braid, k = (sqrt(12) h R)^(-1/2) (seed 001, Eq. 3)."""
+    """Helical wave number of a long knot's braid, k = (sqrt(12) h R)^(-1/2) (Jawed et al. 2015, Eq. 3)."""
     return (math.sqrt(12.0) * thickness_nm * radius_nm) ** -0.5
 
 
 def braid_length_theory(n: int, thickness_nm: float, radius_nm: float) -> float:
-    """l = 2 w_c sqrt(2 h R) (seed 002, Eq. 7)."""
+    """l = 2 w_c sqrt(2 h R) (Audoly et al. 2007, Eq. 7)."""
     return 2.0 * w_c(n) * math.sqrt(2.0 * thickness_nm * radius_nm)
 
 
