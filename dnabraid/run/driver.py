@@ -69,7 +69,8 @@ def packing_notes(groups) -> list[str]:
 
 def moves_summary(dirs) -> dict | None:
     """Metropolis move counts summed over the replicas' ``moves.json`` of one point, with
-    the acceptance of each kind; None when no replica made moves."""
+    the acceptance of each kind (guard checks summed, the guard's largest disagreement
+    kept); None when no replica made moves."""
     tot: dict = {}
     for d in dirs:
         path = os.path.join(d, "moves.json")
@@ -83,7 +84,11 @@ def moves_summary(dirs) -> dict | None:
                                        "accepted": 0})
                 for c in t:
                     t[c] += int(v[c])
-            else:
+            elif k == "guard_checks":
+                tot[k] = tot.get(k, 0) + int(v)
+            elif k == "guard_max_diff_pN_nm":
+                tot[k] = max(tot.get(k, 0.0), float(v))
+            else:  # the moves' settings, the same in every replica
                 tot[k] = v
     if not tot:
         return None
