@@ -40,11 +40,11 @@ import numba
 import numpy as np
 
 from .chain import (
+    apply_accepted,
     ball_proposal,
     crank_proposal,
     delta_kernel,
     hash_build,
-    hash_move,
     rotate_into,
     wca_all,
 )
@@ -383,15 +383,7 @@ def run_braid_moves(pos, P, c_ptr, c_beads, c_fixed, mobile, wgt, center, cum, c
             ncon += dcon[0]
             stats[kind, 2] += 1
             absum += abs(dE)
-            for c in range(terms.shape[0]):
-                terms[c] += dterm[c]
-            for a in range(m):
-                p = idx[a]
-                pos[p, 0] = new[a, 0]
-                pos[p, 1] = new[a, 1]
-                pos[p, 2] = new[a, 2]
-                if P.has_wca and P.w_on[p]:
-                    hash_move(H, p, new[a, 0], new[a, 1], new[a, 2])
+            apply_accepted(pos, new, idx, m, P, H, terms, dterm)
         for a in range(m):
             moved[idx[a]] = 0
     return absum, cat

@@ -528,6 +528,21 @@ def rotation_matrix(ax, ay, az, theta):
 
 
 @numba.njit(cache=True)
+def apply_accepted(pos, new, idx, m, P, H, terms, dterm):
+    """Move the ``m`` particles ``idx`` of an accepted move to ``new``, keep the spatial
+    hash in step and add the move's per-term changes ``dterm`` to ``terms``."""
+    for c in range(terms.shape[0]):
+        terms[c] += dterm[c]
+    for a in range(m):
+        p = idx[a]
+        pos[p, 0] = new[a, 0]
+        pos[p, 1] = new[a, 1]
+        pos[p, 2] = new[a, 2]
+        if P.has_wca and P.w_on[p]:
+            hash_move(H, p, new[a, 0], new[a, 1], new[a, 2])
+
+
+@numba.njit(cache=True)
 def ball_proposal(pos, mobile, nmob, bead_nm, gx, gy, gz, u_pick, u_rad, new):
     """A single-particle proposal: a mobile particle (from ``u_pick``) displaced uniformly in
     the ball of radius ``bead_nm`` (direction from the Gaussian (gx, gy, gz), radius
@@ -715,15 +730,7 @@ def run_chain_moves(pos, P, c_ptr, c_beads, c_fixed, mobile, cum, crank_max, cra
             ncon += dcon[0]
             stats[kind, 2] += 1
             absum += abs(dE)
-            for c in range(terms.shape[0]):
-                terms[c] += dterm[c]
-            for a in range(m):
-                p = idx[a]
-                pos[p, 0] = new[a, 0]
-                pos[p, 1] = new[a, 1]
-                pos[p, 2] = new[a, 2]
-                if P.has_wca and P.w_on[p]:
-                    hash_move(H, p, new[a, 0], new[a, 1], new[a, 2])
+            apply_accepted(pos, new, idx, m, P, H, terms, dterm)
         for a in range(m):
             moved[idx[a]] = 0
     return absum

@@ -205,14 +205,18 @@ class ChainMoves:
                                 self._c_fixed, self._mobile, self._cum, self.crank_max,
                                 self.crank_angle, self.pivot_angle, self.bead_nm, self.kT,
                                 uni, gau, self._stats, terms)
+        self._tally(before, KINDS)
+        return terms, float(absum)
+
+    def _tally(self, before, kinds) -> None:
+        """Add the counts the compiled loop made since ``before`` to each kind's record."""
         d = self._stats - before
-        for r, k in enumerate(KINDS):
+        for r, k in enumerate(kinds):
             if k in self.stats:
                 st = self.stats[k]
                 st.attempted += int(d[r, 0])
                 st.refused += int(d[r, 1])
                 st.accepted += int(d[r, 2])
-        return terms, float(absum)
 
     def attempt(self, get_pos: Callable, set_pos: Callable, energy_fn: Callable, *,
                 parameters: dict | None = None) -> None:
@@ -399,13 +403,7 @@ class BraidMoves(ChainMoves):
                                      self.bead_nm, self.shear_nm, self.shear_z_nm,
                                      self.twist_rad, self.kT, uni, gau, self._stats, terms)
         self.catenation = float(cat)
-        d = self._stats - before
-        for r, k in enumerate(BRAID_KINDS):
-            if k in self.stats:
-                st = self.stats[k]
-                st.attempted += int(d[r, 0])
-                st.refused += int(d[r, 1])
-                st.accepted += int(d[r, 2])
+        self._tally(before, BRAID_KINDS)
         return terms, float(absum)
 
     def summary(self) -> dict:
