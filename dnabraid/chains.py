@@ -465,21 +465,52 @@ class ChainKit:
     def add_chiral(self, alpha_pN: float, chains, *, closed: bool = False) -> openmm.Force:
         """The Kornyshev chiral term alpha tan(eta/2) per unit contact length between the
         facing segments of ``chains`` (:func:`dnabraid.forces.chiral.chiral_force`;
-        docs/chirality.md), rebuilt over every copy when replicas are packed. Its curvature
+        docs/chirality.md), rebuilt over every copy when replicas are packed. Its weight is
+        flat (1) up to the contact distance: the capsule contact's D_c where
+        :meth:`add_capsule_contact` was called, else the effective diameter. Its curvature
         per unit alpha is at most ~0.1 A / lambda_D^2 per nm of partner (A ~ 1/(2 Delta)),
         summed over ~2 Delta of partner and both ends: that bounds its rate."""
         from .forces.chiral import chiral_force
 
         d = self.dna
+        contact = float(getattr(self, "capsule_contact_nm", None) or d.diameter_nm)
 
-        def make(chs, d=d, alpha=float(alpha_pN), closed=bool(closed)):
-            return chiral_force(chs, alpha, delta_nm=d.diameter_nm, debye_nm=d.debye_nm,
+        def make(chs, d=d, alpha=float(alpha_pN), closed=bool(closed), contact=contact):
+            return chiral_force(chs, alpha, delta_nm=contact, debye_nm=d.debye_nm,
                                 bead_spacing_nm=d.bead_spacing_nm, closed=closed,
                                 name="chiral")
 
         return self.add_rebuildable_force(
             make, chains, "chiral",
             rate=abs(alpha_pN) * 0.1 / d.debye_nm**2 * 4.0 / d.zeta_bead)
+
+    def add_capsule_contact(self, chains, *, contact_nm: float | None = None,
+                            k_pN_per_nm: float | None = None) -> openmm.Force:
+        """Capsule (segment-segment) excluded volume between different ``chains``
+        (:func:`dnabraid.forces.segment_contact.capsule_force`): k/2 (D_c - d)^2 for
+        d < D_c, d the closest distance of two segments. D_c defaults to the effective
+        diameter, k to the bead contact's stiffness (``wall_k`` = U''_WCA(sigma)). The
+        caller removes the bead WCA between these chains. Records ``capsule_contact_nm``,
+        which :meth:`add_chiral` then uses as its contact distance. Rebuilt over packed
+        copies (a PythonForce). Its rate: 2 k / zeta, as the WCA contact's."""
+        from .forces.segment_contact import capsule_force
+
+        d = self.dna
+        D = float(contact_nm) if contact_nm is not None else d.diameter_nm
+        k = float(k_pN_per_nm) if k_pN_per_nm is not None else d.wall_k
+        self.capsule_contact_nm = D
+
+        def make(chs, D=D, k=k):
+            return capsule_force(chs, D, k, name="capsule")
+
+        chains = tuple(np.asarray(c, int).copy() for c in chains)
+        self.rebuild_forces["capsule"] = ForceRebuild(make, chains)
+        # no group of its own in GROUPS: it shares the excluded volume's
+        f = self.add_force(make(list(chains)), "capsule", rate=2.0 * k / d.zeta_bead,
+                           group="wca")
+        self.present["capsule"] = GROUPS["wca"]
+        self.bound("stretch", "bend", "wca", "capsule", "chiral")
+        return f
 
     def finish(self, *, safety: float, params=None, length_nm: float = 0.0,
                force_pN: float = 0.0) -> Model:

@@ -3,10 +3,12 @@ pair search, apolar fold and cutoff continuity; its range (docs/chiral_range.md)
 
 Tolerances: OpenMM (Reference platform, double) against the numpy twin 1e-9 relative;
 finite differences (central, h = 1e-6 nm) 1e-6 relative; the mirror image flips the sign of
-the energy to 1e-12 relative; the ideal two-ply carries alpha tan(eta/2) to 1 %. The range
-tests compare with kappa_1 = sqrt(lambda_D^-2 + (2 pi / 3.4 nm)^2) computed here from the
-Debye formula (Kornyshev & Leikin 1997; reference_chiral Eq. C6) to 1e-12 (1e-9 through
-OpenMM), and the weight's amplitude with its small-rho/Delta expansion to 1 %.
+the energy to 1e-12 relative; the ideal two-ply (0.5 nm beads) carries alpha tan(eta/2) to
+1 %; straight strands at axis distance R <= D_c carry exactly alpha g per unit length,
+whatever the beads' register, and the weight has zero slope at D_c (flat at contact). The
+range tests compare with kappa_1 = sqrt(lambda_D^-2 + (2 pi / 3.4 nm)^2) computed here from
+the Debye formula (Kornyshev & Leikin 1997; reference_chiral Eq. C6) to 1e-12 (1e-9 through
+OpenMM).
 """
 
 import math
@@ -14,7 +16,6 @@ import math
 import numpy as np
 import pytest
 from _openmm_eval import openmm_energy_forces
-from scipy import special
 
 from dnabraid import forcefield, units
 from dnabraid.forcefield import load_toml
@@ -91,7 +92,7 @@ def all_pairs(chains, excl=3, closed=False):
 
 def test_twin_against_finite_differences():
     rng = np.random.default_rng(SEED)
-    kern = ChiralKernel(DELTA, DEBYE)  # built once: chiral_energy_forces calibrates per call
+    kern = ChiralKernel(DELTA, DEBYE)
     for _ in range(3):
         pos, chains = scene(rng, 10)
         e, f = chiral_energy_forces(pos, chains, 3.0, **KW)
@@ -142,32 +143,76 @@ def test_mirror_flips_sign_exactly():
         assert np.allclose(fm, -(f @ refl), atol=1e-10 * np.abs(f).max())
 
 
-@pytest.mark.parametrize("delta,debye", [(15.0, 3.04), (4.9, 0.785), (2.9, 0.304)])
-def test_normalisation_continuum(delta, debye):
-    k = ChiralKernel(delta, debye)
-    for deg in (-60, -45, -30, -10, -2, 5, 20, 40, 60):
-        eta = math.radians(deg)
-        assert k.two_ply_density(eta) == pytest.approx(math.tan(eta / 2), rel=0.01)
+def helix_pair(R, eta, h=0.5, shift=0.0, length=60.0):
+    """Ideal two-ply at strand (axis) distance R and braid angle eta; strand 2's beads
+    shifted by ``shift`` along its arc (the beads' register)."""
+    r = 0.5 * R
+    th = 0.5 * abs(eta)
+    hand = 1.0 if eta <= 0 else -1.0
+    pitch = r / math.tan(th)
+    ds = math.hypot(r, pitch)
+    out = []
+    for off, sh in ((0.0, 0.0), (math.pi, shift)):
+        ph = (np.arange(0.0, length, h) + sh) / ds
+        out.append(np.stack([r * np.cos(hand * ph + off), r * np.sin(hand * ph + off),
+                             pitch * ph], 1))
+    n = len(out[0])
+    return np.vstack(out), [np.arange(n), n + np.arange(n)]
+
+
+@pytest.mark.parametrize("shift", [0.0, 0.2])
+def test_two_ply_flat_at_contact_and_register_free(shift):
+    """Energy per unit length of the middle of an ideal two-ply (eta = -30 deg, 0.5 nm beads)
+    against its strand distance R: tan(eta/2) at R = D_c (1.5 %), the same at R < D_c (the
+    weight is 1 there), zero slope at D_c (the weight is flat at contact: no radial pull or
+    push; the old Fermi weight had -1.8/nm), w(R) beyond; the beads' register moves it by
+    < 1 %."""
+    eta = math.radians(-30.0)
+    k = ChiralKernel(DELTA, DEBYE)
+
+    def per_length(R, sh):
+        vals = []
+        for length in (60.0, 120.0):
+            pos, ch = helix_pair(R, eta, shift=sh, length=length)
+            vals.append(fast_energy(pos, ch, q=2)[0])
+        return (vals[1] - vals[0]) / 60.0
+
+    e0 = per_length(DELTA, shift)
+    assert e0 == pytest.approx(math.tan(eta / 2), rel=0.015)
+    assert per_length(DELTA - 0.5, shift) == pytest.approx(e0, rel=1e-3)
+    slope = (per_length(DELTA + 0.01, shift) - e0) / 0.01
+    assert abs(slope) < 0.05 * abs(e0)
+    assert per_length(DELTA + 0.3, shift) == pytest.approx(
+        e0 * float(k.weight(DELTA + 0.3)[0]), rel=0.01)
+    if shift:
+        assert e0 == pytest.approx(per_length(DELTA, 0.0), rel=0.01)
+
+
+def test_weight_is_flat_at_contact():
+    w, dw = ChiralKernel(DELTA, DEBYE).weight(np.array([DELTA - 1.0, DELTA, DELTA + 1e-6]))
+    assert np.all(w[:2] == 1.0) and np.all(dw[:2] == 0.0) and abs(dw[2]) < 1e-5
 
 
 @pytest.mark.parametrize("deg", [-50, -20, 35])
 def test_normalisation_beads_fine(deg):
-    """Bead two-ply, spacing 0.5 nm: energy per unit strand length = alpha tan(eta/2)."""
+    """Bead two-ply, spacing 0.5 nm, two sample points per segment: energy per unit strand
+    length = alpha tan(eta/2)."""
     eta = math.radians(deg)
     e = []
     for length in (60.0, 120.0):
         pos, ch = two_ply(eta, length=length)
-        e.append(fast_energy(pos, ch)[0])
+        e.append(fast_energy(pos, ch, q=2)[0])
     per_length = (e[1] - e[0]) / 60.0
     assert per_length == pytest.approx(math.tan(eta / 2), rel=0.01)
 
 
 def test_sign_energy_falls_with_eta():
     """alpha > 0: the two-ply energy falls as eta falls; right-handed (eta < 0) is lower."""
-    k = ChiralKernel(DELTA, DEBYE)
-    etas = np.radians(np.arange(-85, 86, 5))
-    dens = np.array([k.two_ply_density(e) for e in etas])
-    assert np.all(np.diff(dens[np.abs(etas) <= math.radians(60)]) > 0)
+    dens = []
+    for deg in (-60, -40, -20, -5, 5, 20, 40, 60):
+        pos, ch = two_ply(math.radians(deg), h=1.0, length=60.0)
+        dens.append(fast_energy(pos, ch, q=2)[0])
+    assert np.all(np.diff(dens) > 0)
     # bead model, alpha = 1 pN
     pos_r, ch = two_ply(math.radians(-30), h=3.0, length=150)
     pos_l, _ = two_ply(math.radians(30), h=3.0, length=150)
@@ -188,9 +233,19 @@ def test_apolar_fold_and_continuity():
     assert e2 == pytest.approx(e1, rel=1e-12)
     k = ChiralKernel(DELTA, DEBYE)
     for eps in (1e-3, 1e-5):
-        # across c = 0 at s = 1: G and its slope vanish from both sides
-        g, dgc, _ = k.angular(np.array([-eps, eps]), np.array([1.0, 1.0]))
-        assert np.all(np.abs(g) < 10 * eps**3) and np.all(np.abs(dgc) < 100 * eps**2)
+        # across c = 0 (eta' = +-90 deg) at s = 1: G -> 0 with the same slope dG/dc = s
+        g, dgc, dgs = k.angular(np.array([-eps, eps]), np.array([1.0, 1.0]))
+        assert np.all(np.abs(g) < 2 * eps) and np.allclose(dgc, 1.0, atol=3 * eps)
+        assert np.all(np.abs(dgs) < 3 * eps)
+    # G = cos(eta) tan(eta/2) at unit facing factor; derivatives against differences
+    eta = np.radians(np.linspace(-89.0, 89.0, 41))
+    g, dgc, dgs = k.angular(np.cos(eta), np.sin(eta))
+    assert np.allclose(g, np.cos(eta) * np.tan(0.5 * eta), rtol=1e-12, atol=1e-15)
+    c, s_, h = np.cos(eta) * 0.9, np.sin(eta) * 0.9, 1e-7
+    gc = (k.angular(c + h, s_)[0] - k.angular(c - h, s_)[0]) / (2 * h)
+    gs = (k.angular(c, s_ + h)[0] - k.angular(c, s_ - h)[0]) / (2 * h)
+    _, dgc, dgs = k.angular(c, s_)
+    assert np.allclose(dgc, gc, atol=1e-7) and np.allclose(dgs, gs, atol=1e-7)
     # near c = s = 0 (eta undefined) G -> 0
     g, _, _ = k.angular(np.array([1e-4]), np.array([1e-4]))
     assert abs(g[0]) < 1e-7
@@ -201,9 +256,7 @@ def test_weight_vanishes_smoothly_at_cutoff():
     w, dw = k.weight(np.array([k.r_c - 1e-4, k.r_c, k.r_c + 1.0]))
     assert w[0] < 1e-9 and w[1] == 0.0 and w[2] == 0.0
     assert abs(dw[0]) < 1e-5 and dw[1] == 0.0
-    # normalisation along a straight partner (Eq. C2)
-    v = np.linspace(-k.r_c, k.r_c, 200001)
-    assert np.trapezoid(k.weight(np.hypot(DELTA, v))[0], v) == pytest.approx(1.0, rel=1e-6)
+    assert k.amplitude == 1.0  # normalised at contact: w(D_c) = 1
 
 
 # --- the range (docs/chiral_range.md) ----------------------------------------------------------
@@ -221,7 +274,7 @@ def kappa_1(salt_mM, pitch_nm=3.4):
 
 @pytest.mark.parametrize("salt,delta", RANGE_SALTS)
 def test_weight_decays_with_first_helical_harmonic(salt, delta):
-    """The weight falls like the Fermi step of length 1/kappa_1 (not lambda_D), is cut at
+    """The weight falls like (1 + x) exp(-x), x = (r - D_c) kappa_1 (not lambda_D), is cut at
     Delta + 6/kappa_1, and the force field reports the same range."""
     lam = 0.304 / math.sqrt(salt / 1000.0)
     kap = kappa_1(salt)
@@ -231,7 +284,7 @@ def test_weight_decays_with_first_helical_harmonic(salt, delta):
     assert k.r_s == pytest.approx(delta + 4.0 / kap, rel=1e-12)
     # tail ratio before the switch (r < r_s): the amplitude cancels
     w1, w3 = k.weight(np.array([delta + 1.0 / kap, delta + 3.0 / kap]))[0]
-    assert w3 / w1 == pytest.approx((1.0 + math.e) / (1.0 + math.e**3), rel=1e-12)
+    assert w3 / w1 == pytest.approx(2.0 * math.exp(-2.0), rel=1e-12)
     assert k.weight(delta + 6.0 / kap + 1e-9)[0] == 0.0 < k.weight(delta + 5.9 / kap)[0]
     out = forcefield.chiral_parameters(salt)
     assert out["range_nm"] == pytest.approx(1.0 / kap, rel=1e-12)
@@ -246,28 +299,10 @@ def test_range_table_matches_the_formula():
         assert entry["range_nm"] == pytest.approx(1.0 / kappa_1(float(key)), abs=6e-5)
 
 
-@pytest.mark.parametrize("salt,delta", RANGE_SALTS)
-def test_amplitude_against_small_range_expansion(salt, delta):
-    """Eq. (C2) by hand: with r = sqrt(Delta^2 + v^2) = Delta + v^2/(2 Delta) - v^4/(8 Delta^3)
-    and v = sqrt(2 Delta rho) x, int f dv = sqrt(2 Delta rho) (I0 + rho/(2 Delta) I1 + ...),
-    I0 = int dx / (1 + e^{x^2}) = sqrt(pi) (1 - sqrt 2) zeta(1/2) and
-    I1 = int x^4 e^{x^2} / (1 + e^{x^2})^2 dx = (3/2) Gamma(3/2) (1 - 2^{-1/2}) zeta(3/2)
-    (integrals over the real line); so A = 1 / that, to O((rho/Delta)^2) and the switch's
-    cut (~0.5 %). With the Debye length as range A would be off by sqrt(lambda_D kappa_1)
-    (12-130 %)."""
-    lam = 0.304 / math.sqrt(salt / 1000.0)
-    rho = 1.0 / kappa_1(salt)
-    i0 = math.sqrt(math.pi) * (1.0 - math.sqrt(2.0)) * special.zeta(0.5)
-    i1 = 1.5 * special.gamma(1.5) * (1.0 - 2.0**-0.5) * special.zeta(1.5)
-    expected = 1.0 / (math.sqrt(2.0 * delta * rho) * (i0 + rho / (2.0 * delta) * i1))
-    assert ChiralKernel(delta, lam, calibrate=False).amplitude == pytest.approx(expected,
-                                                                                rel=0.01)
-
-
 def test_openmm_force_from_debye_length_decays_with_kappa_1():
     """The scene's call (chiral_force with the Debye length only): one segment pair at
     braid angle -30 deg, chord perpendicular to both, pulled apart along the chord. Energies
-    at Delta + 1/kappa_1 and Delta + 3/kappa_1 are in the Fermi ratio of kappa_1; beyond
+    at Delta + 1/kappa_1 and Delta + 3/kappa_1 are in the ratio 4 e^-3 / (2 e^-1); beyond
     Delta + 6/kappa_1 (still inside the old cutoff Delta + 6 lambda_D = 9.6 nm) energy and
     forces are exactly zero."""
     lam = 0.304 / math.sqrt(0.15)
@@ -285,7 +320,7 @@ def test_openmm_force_from_debye_length_decays_with_kappa_1():
         energies.append((e, f))
     (e1, _), (e3, _), (e7, f7) = energies
     assert e1 < 0.0  # alpha > 0 favours eta < 0
-    assert e3 / e1 == pytest.approx((1.0 + math.e) / (1.0 + math.e**3), rel=1e-9)
+    assert e3 / e1 == pytest.approx(2.0 * math.exp(-2.0), rel=1e-9)
     assert DELTA + 7.0 / kap < DELTA + 6.0 * lam
     assert e7 == 0.0 and np.all(f7 == 0.0)
 
@@ -366,7 +401,7 @@ def test_alpha_zero_is_left_out_and_parameters_file():
 
 def kernel_scenes(rng):
     """Random walks (most pairs beyond the cutoff), a near-antiparallel pair of strands (the
-    fold: c close to -1), a near-perpendicular crossing (the angular switch) and an ideal
+    fold: c close to -1), a near-perpendicular crossing (eta' near 90 deg) and an ideal
     two-ply with one strand reversed."""
     out = []
     for _ in range(2):
@@ -387,8 +422,7 @@ def kernel_scenes(rng):
 
 def compiled(pos, seg, a, b, kern, q, loop):
     grad = np.zeros_like(pos)
-    e = loop(pos, seg, a, b, q, kern.delta, kern.range, kern.amplitude, kern.r_s, kern.r_c,
-             kern.eta_on, kern.ncoef, 1.0, grad)
+    e = loop(pos, seg, a, b, q, kern.delta, kern.range, kern.r_s, kern.r_c, 1.0, grad)
     return e, grad
 
 

@@ -220,3 +220,87 @@ def test_straight_strands_slide_without_corrugation():
     assert np.ptp(dseg) < 1e-12 and dseg[0] == pytest.approx(d0, abs=1e-12)
     assert max(dbead) == pytest.approx(np.sqrt(d0**2 + b**2 / 2), abs=1e-12)
     assert min(dbead) == pytest.approx(np.sqrt(d0**2 + b**2 / 4), abs=1e-12)
+
+
+# --------------------------------------------------- the thermal capsule force (PythonForce)
+def _two_walks(rng, n=25, b=5.0, gap=3.0):
+    """Two random walks of n beads b apart, started ``gap`` apart: many close pairs."""
+    out = []
+    for k in range(2):
+        st = rng.normal(size=(n, 3))
+        st /= np.linalg.norm(st, axis=1)[:, None]
+        out.append(np.cumsum(st * b, axis=0) * 0.5 + k * np.array([gap, 0.0, 0.0]))
+    return np.vstack(out), [np.arange(n), n + np.arange(n)]
+
+
+def _capsule_twin(x, chains, D, k):
+    """contact_energy over every inter-chain segment pair: the numpy twin of capsule_force."""
+    seg = np.vstack([np.column_stack([c[:-1], c[1:]]) for c in chains])
+    m0 = len(chains[0]) - 1
+    pairs = np.array([(i, j) for i in range(m0) for j in range(m0, len(seg))])
+    g, _ = sc.contact_gradient_hessian(x, seg, pairs, D, k)
+    return sc.contact_energy(x, seg, pairs, D, k), g
+
+
+@pytest.mark.parametrize("backend", ["numpy", "auto"])
+def test_capsule_force_matches_twin_and_finite_differences(backend):
+    """capsule_force (OpenMM PythonForce, Reference platform) against contact_energy and its
+    gradient over all inter-strand pairs (1e-10), and the twin against central differences;
+    pairs within a strand do not interact."""
+    rng = np.random.default_rng(SEED + 5)
+    D, k = 4.9, 78.0
+    x, chains = _two_walks(rng)
+    e_ref, g_ref = _capsule_twin(x, chains, D, k)
+    assert e_ref > 0
+    e, f = openmm_energy_forces(sc.capsule_force(chains, D, k, backend=backend), x)
+    assert e == pytest.approx(e_ref, rel=1e-10)
+    assert np.abs(f + g_ref).max() < 1e-9 * np.abs(g_ref).max()
+    h = 1e-6
+    for i in rng.choice(len(x), 8, replace=False):
+        for a in range(3):
+            xp, xm = x.copy(), x.copy()
+            xp[i, a] += h
+            xm[i, a] -= h
+            fd = (_capsule_twin(xp, chains, D, k)[0] - _capsule_twin(xm, chains, D, k)[0]) / (2 * h)
+            assert fd == pytest.approx(g_ref[i, a], rel=1e-5, abs=1e-6 * np.abs(g_ref).max())
+
+
+def test_capsule_verlet_list_under_motion():
+    """The evaluator's Verlet list (rebuilt when a bead moves > skin/2) never misses a pair:
+    energy and gradient equal the all-pairs twin along a random path, numba and numpy alike."""
+    rng = np.random.default_rng(SEED + 6)
+    D, k = 4.9, 78.0
+    x, chains = _two_walks(rng, 30)
+    seg = np.vstack([np.column_stack([c[:-1], c[1:]]) for c in chains])
+    cid = np.repeat([0, 1], len(chains[0]) - 1)
+    evs = [sc.CapsuleEvaluator(seg, cid, D, 1.0, "k", backend=b) for b in ("numpy", "auto")]
+    for _ in range(20):
+        x = x + rng.normal(size=x.shape) * 0.06
+        e_ref, g_ref = _capsule_twin(x, chains, D, k)
+        for ev in evs:
+            e, g = ev.energy_grad(x, k)
+            assert e == pytest.approx(e_ref, rel=1e-10, abs=1e-12)
+            assert np.allclose(g, g_ref, atol=1e-9 * max(1.0, np.abs(g_ref).max()))
+    assert all(1 < ev.n_builds < 20 for ev in evs)
+
+
+def test_capsule_contact_distance_is_register_free():
+    """Two parallel straight strands pressed together by a force per bead: their axis
+    distance is D_c - F/k (one pair carries each bead's load) whatever the register, where
+    bead WCA would give a rippling 2^(1/6) sigma-ish distance. Unloaded: exactly D_c."""
+    D, k, b, n = 4.9, 78.0, 5.0, 11
+    z = b * np.arange(n)
+    for shift in (0.0, 1.3, 2.5):
+        x = np.vstack([np.column_stack([0 * z, 0 * z, z]),
+                       np.column_stack([0 * z + D - 0.01, 0 * z, z + shift])])
+        chains = [np.arange(n), n + np.arange(n)]
+        e, g = _capsule_twin(x, chains, D, k)
+        # every interior segment overlaps the partner: the push is along x only
+        assert np.allclose(g[:, 1:], 0.0, atol=1e-12)
+        x[n:, 0] = D
+        assert _capsule_twin(x, chains, D, k)[0] == 0.0
+
+
+def test_capsule_force_refuses_bad_parameters():
+    with pytest.raises(ValueError, match="contact_nm"):
+        sc.capsule_force([np.arange(3), 3 + np.arange(3)], 0.0, 78.0)

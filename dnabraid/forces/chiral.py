@@ -67,6 +67,7 @@ from .reference_chiral import (
     chiral_range_nm,
     default_subdivisions,
     pair_allowed,
+    pair_terms,
     segments_of,
 )
 
@@ -151,70 +152,9 @@ def _cross(a, b):
 
 
 def pair_terms_fast(pos, seg, a, b, kernel, q):
-    """Same result as :func:`~dnabraid.forces.reference_chiral.pair_terms`, written for speed.
-
-    Component-major (3, P) arrays, no masking (the weight is exactly zero beyond r_c) and
-    scatter by ``np.bincount``; an independent implementation, tested against the twin.
-    """
-    n = len(pos)
-    grad = np.zeros((n, 3))
-    if len(a) == 0:
-        return 0.0, grad
-    X = np.ascontiguousarray(pos.T)
-    i0, i1, j0, j1 = seg[a, 0], seg[a, 1], seg[b, 0], seg[b, 1]
-    xa, xb = X[:, i0], X[:, j0]
-    ea, eb = X[:, i1] - xa, X[:, j1] - xb
-    la = np.sqrt((ea * ea).sum(0))
-    lb = np.sqrt((eb * eb).sum(0))
-    ta, tb = ea / la, eb / lb
-    npair = len(a)
-    if q == 1:
-        fk = fm = np.full(npair, 0.5)
-        rep = slice(None)
-        r = (xb + 0.5 * eb) - (xa + 0.5 * ea)
-    else:
-        fr = (np.arange(q) + 0.5) / q
-        fk = np.tile(np.repeat(fr, q), npair)
-        fm = np.tile(np.tile(fr, q), npair)
-        rep = np.repeat(np.arange(npair), q * q)
-        r = (xb[:, rep] + fm * eb[:, rep]) - (xa[:, rep] + fk * ea[:, rep])
-    rn = np.sqrt((r * r).sum(0))
-    d = r / rn
-    tap, tbp = ta[:, rep], tb[:, rep]
-    cr = _cross(tap, tbp)
-    c = (tap * tbp).sum(0)
-    s = (cr * d).sum(0)
-    K, dK = kernel.weight(rn)
-    G, dGc, dGs = kernel.angular(c, s)
-    w = (la * lb / (q * q))[rep] if q > 1 else la * lb
-    wK = w * K
-    e = float(np.dot(wK, G))
-    sd = (cr * d).sum(0)
-    dE_dr = (w * dK * G) * d + (wK * dGs / rn) * (cr - sd * d)
-    dE_dta = wK * (dGc * tbp + dGs * _cross(tbp, d))
-    dE_dtb = wK * (dGc * tap + dGs * _cross(d, tap))
-    KG = K * G / (q * q)
-    if q > 1:
-        dE_dta = dE_dta.reshape(3, npair, q * q).sum(2)
-        dE_dtb = dE_dtb.reshape(3, npair, q * q).sum(2)
-        KG = KG.reshape(npair, q * q).sum(1)
-    dE_dea = (dE_dta - (dE_dta * ta).sum(0) * ta) / la + (lb * KG) * ta
-    dE_deb = (dE_dtb - (dE_dtb * tb).sum(0) * tb) / lb + (la * KG) * tb
-    if q == 1:
-        ga0 = -dE_dea - 0.5 * dE_dr
-        ga1 = dE_dea - 0.5 * dE_dr
-        gb0 = -dE_deb + 0.5 * dE_dr
-        gb1 = dE_deb + 0.5 * dE_dr
-    else:
-        ga0 = -dE_dea - ((1.0 - fk) * dE_dr).reshape(3, npair, q * q).sum(2)
-        ga1 = dE_dea - (fk * dE_dr).reshape(3, npair, q * q).sum(2)
-        gb0 = -dE_deb + ((1.0 - fm) * dE_dr).reshape(3, npair, q * q).sum(2)
-        gb1 = dE_deb + (fm * dE_dr).reshape(3, npair, q * q).sum(2)
-    idx = np.concatenate([i0, i1, j0, j1])
-    val = np.concatenate([ga0, ga1, gb0, gb1], axis=1)
-    for k in range(3):
-        grad[:, k] = np.bincount(idx, val[k], minlength=n)
-    return e, grad
+    """Same result as :func:`~dnabraid.forces.reference_chiral.pair_terms` (the numpy
+    fallback without numba): the twin's vectorised evaluation itself."""
+    return pair_terms(np.asarray(pos, float), seg, a, b, kernel, q)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -225,14 +165,14 @@ def pair_terms_fast(pos, seg, a, b, kernel, q):
 # ---------------------------------------------------------------------------------------------
 
 
-def _pair_loop(pos, seg, a, b, q, delta, rho, amplitude, r_s, r_c, eta_on, ncoef, scale,
-               out):
-    """Eq. (C1) over candidate segment pairs, one pair and sample point at a time.
+def _pair_loop(pos, seg, a, b, q, delta, rho, r_s, r_c, scale, out):
+    """Eq. (C1) over candidate segment pairs, both ways, one sample point at a time.
 
-    Computes what :func:`pair_terms_fast` computes for the pairs (a, b) that pass the
-    midpoint filter |m_b - m_a| < r_c + (l_a + l_b)/2 (the others have no sample points
-    within r_c), with K(r) and G(c, s) of
-    :class:`~dnabraid.forces.reference_chiral.ChiralKernel` written out inline.
+    Computes what :func:`~dnabraid.forces.reference_chiral.pair_terms` computes, with w(r),
+    psi(t) and G(c, s) of :class:`~dnabraid.forces.reference_chiral.ChiralKernel` written out
+    inline. A direction (points of segment u against the line of segment v) is skipped when
+    the midpoints are farther apart than r_c + l_u/2 + l_v (then no point of u has its foot
+    within psi's support at a distance below r_c).
 
     Parameters
     ----------
@@ -241,11 +181,8 @@ def _pair_loop(pos, seg, a, b, q, delta, rho, amplitude, r_s, r_c, eta_on, ncoef
     a, b : (P,) int64 arrays of candidate segment pairs
     q : int
         Sample points per segment.
-    delta, rho, amplitude, r_s, r_c, eta_on : float
-        Kernel parameters (ChiralKernel attributes of the same names; rho is
-        ``ChiralKernel.range``, the decay length of the weight).
-    ncoef : (D,) float64 array
-        N(eta) = polyval(ncoef, eta^2).
+    delta, rho, r_s, r_c : float
+        Kernel parameters (ChiralKernel ``delta``, ``range``, ``r_s``, ``r_c``).
     scale : float
         The gradient is added to ``out`` times ``scale`` (1: dE/dx; -alpha: forces).
     out : (N, 3) float64 array
@@ -257,201 +194,170 @@ def _pair_loop(pos, seg, a, b, q, delta, rho, amplitude, r_s, r_c, eta_on, ncoef
         Energy per unit alpha (nm), not scaled.
     """
     inv_sw = 1.0 / (r_c - r_s)
-    inv_range = 1.0 / rho
-    half_pi = 0.5 * math.pi
-    inv_ang = 1.0 / (half_pi - eta_on)
-    nd = ncoef.shape[0]
+    inv_rho = 1.0 / rho
     inv_q = 1.0 / q
-    inv_q2 = inv_q * inv_q
     e_tot = 0.0
-    # per segment, once: length, unit tangent, midpoint
-    nseg = seg.shape[0]
-    sl = np.empty(nseg)
-    st = np.empty((nseg, 3))
-    sm = np.empty((nseg, 3))
-    for i in range(nseg):
-        u0 = pos[seg[i, 1], 0] - pos[seg[i, 0], 0]
-        u1 = pos[seg[i, 1], 1] - pos[seg[i, 0], 1]
-        u2 = pos[seg[i, 1], 2] - pos[seg[i, 0], 2]
-        li = math.sqrt(u0 * u0 + u1 * u1 + u2 * u2)
-        sl[i] = li
-        st[i, 0] = u0 / li
-        st[i, 1] = u1 / li
-        st[i, 2] = u2 / li
-        sm[i, 0] = pos[seg[i, 0], 0] + 0.5 * u0
-        sm[i, 1] = pos[seg[i, 0], 1] + 0.5 * u1
-        sm[i, 2] = pos[seg[i, 0], 2] + 0.5 * u2
     for p in range(a.shape[0]):
-        sa = a[p]
-        sb = b[p]
-        la = sl[sa]
-        lb = sl[sb]
-        # midpoint filter: no sample point of a is within r_c of one of b otherwise
-        m0 = sm[sb, 0] - sm[sa, 0]
-        m1 = sm[sb, 1] - sm[sa, 1]
-        m2 = sm[sb, 2] - sm[sa, 2]
-        lim = r_c + 0.5 * (la + lb)
-        if m0 * m0 + m1 * m1 + m2 * m2 >= lim * lim:
-            continue
-        i0 = seg[sa, 0]
-        i1 = seg[sa, 1]
-        j0 = seg[sb, 0]
-        j1 = seg[sb, 1]
-        xa0 = pos[i0, 0]
-        xa1 = pos[i0, 1]
-        xa2 = pos[i0, 2]
-        xb0 = pos[j0, 0]
-        xb1 = pos[j0, 1]
-        xb2 = pos[j0, 2]
-        ea0 = pos[i1, 0] - xa0
-        ea1 = pos[i1, 1] - xa1
-        ea2 = pos[i1, 2] - xa2
-        eb0 = pos[j1, 0] - xb0
-        eb1 = pos[j1, 1] - xb1
-        eb2 = pos[j1, 2] - xb2
-        ta0 = st[sa, 0]
-        ta1 = st[sa, 1]
-        ta2 = st[sa, 2]
-        tb0 = st[sb, 0]
-        tb1 = st[sb, 1]
-        tb2 = st[sb, 2]
-        c = ta0 * tb0 + ta1 * tb1 + ta2 * tb2
-        if not abs(c) > 1e-12:
-            continue  # G = 0 for every sample point (eta undefined)
-        cr0 = ta1 * tb2 - ta2 * tb1
-        cr1 = ta2 * tb0 - ta0 * tb2
-        cr2 = ta0 * tb1 - ta1 * tb0
-        w = la * lb * inv_q2
-        # per-pair accumulators: dE/dt_a, dE/dt_b, sum K G / q^2
-        gta0 = gta1 = gta2 = 0.0
-        gtb0 = gtb1 = gtb2 = 0.0
-        kg = 0.0
-        # gradient on the four beads from dE/dr
-        ga00 = ga01 = ga02 = ga10 = ga11 = ga12 = 0.0
-        gb00 = gb01 = gb02 = gb10 = gb11 = gb12 = 0.0
-        live = False
-        for k in range(q):
-            fk = (k + 0.5) * inv_q
-            pa0 = xa0 + fk * ea0
-            pa1 = xa1 + fk * ea1
-            pa2 = xa2 + fk * ea2
-            for m in range(q):
-                fm = (m + 0.5) * inv_q
-                r0 = (xb0 + fm * eb0) - pa0
-                r1 = (xb1 + fm * eb1) - pa1
-                r2 = (xb2 + fm * eb2) - pa2
+        for way in range(2):
+            if way == 0:
+                su = a[p]
+                sv = b[p]
+            else:
+                su = b[p]
+                sv = a[p]
+            i0 = seg[su, 0]
+            i1 = seg[su, 1]
+            j0 = seg[sv, 0]
+            j1 = seg[sv, 1]
+            ea0 = pos[i1, 0] - pos[i0, 0]
+            ea1 = pos[i1, 1] - pos[i0, 1]
+            ea2 = pos[i1, 2] - pos[i0, 2]
+            eb0 = pos[j1, 0] - pos[j0, 0]
+            eb1 = pos[j1, 1] - pos[j0, 1]
+            eb2 = pos[j1, 2] - pos[j0, 2]
+            la = math.sqrt(ea0 * ea0 + ea1 * ea1 + ea2 * ea2)
+            L2 = eb0 * eb0 + eb1 * eb1 + eb2 * eb2
+            lb = math.sqrt(L2)
+            m0 = pos[j0, 0] + 0.5 * eb0 - pos[i0, 0] - 0.5 * ea0
+            m1 = pos[j0, 1] + 0.5 * eb1 - pos[i0, 1] - 0.5 * ea1
+            m2 = pos[j0, 2] + 0.5 * eb2 - pos[i0, 2] - 0.5 * ea2
+            lim = r_c + 0.5 * la + lb
+            if m0 * m0 + m1 * m1 + m2 * m2 >= lim * lim:
+                continue
+            ta0 = ea0 / la
+            ta1 = ea1 / la
+            ta2 = ea2 / la
+            tb0 = eb0 / lb
+            tb1 = eb1 / lb
+            tb2 = eb2 / lb
+            c = ta0 * tb0 + ta1 * tb1 + ta2 * tb2
+            cr0 = ta1 * tb2 - ta2 * tb1
+            cr1 = ta2 * tb0 - ta0 * tb2
+            cr2 = ta0 * tb1 - ta1 * tb0
+            # accumulators: dE/dx_a0, dE/dx_a1, dE/dx_b0, dE/dx_b1
+            ga00 = ga01 = ga02 = ga10 = ga11 = ga12 = 0.0
+            gb00 = gb01 = gb02 = gb10 = gb11 = gb12 = 0.0
+            for k in range(q):
+                f = (k + 0.5) * inv_q
+                w0 = pos[i0, 0] + f * ea0 - pos[j0, 0]
+                w1 = pos[i0, 1] + f * ea1 - pos[j0, 1]
+                w2 = pos[i0, 2] + f * ea2 - pos[j0, 2]
+                t = (w0 * eb0 + w1 * eb1 + w2 * eb2) / L2
+                if not (t > -0.5 and t < 1.5):
+                    continue
+                r0 = t * eb0 - w0
+                r1 = t * eb1 - w1
+                r2 = t * eb2 - w2
                 rn = math.sqrt(r0 * r0 + r1 * r1 + r2 * r2)
-                if not rn < r_c:
-                    continue  # K = dK = 0 exactly
+                if not (rn < r_c and rn > 1e-12):
+                    continue
                 inv_rn = 1.0 / rn
                 d0 = r0 * inv_rn
                 d1 = r1 * inv_rn
                 d2 = r2 * inv_rn
                 s = cr0 * d0 + cr1 * d1 + cr2 * d2
-                # angular factor G(c, s), Eq. (C3): fold eta' = atan(s/c), switch S, N(eta')
-                eta = math.atan(s / c)
-                x = (abs(eta) - eta_on) * inv_ang
+                # share psi(t) = sigma(t + 1/2) - sigma(t - 1/2)
+                x = t + 0.5
                 if x >= 1.0:
-                    continue  # S = 0: G = dG = 0
+                    s1 = 1.0
+                    ds1 = 0.0
+                else:
+                    s1 = x * x * x * (10.0 - 15.0 * x + 6.0 * x * x)
+                    ds1 = 30.0 * x * x * (1.0 - x) * (1.0 - x)
+                x = t - 0.5
                 if x <= 0.0:
-                    sw = 1.0
-                    dsw = 0.0
+                    s2 = 0.0
+                    ds2 = 0.0
                 else:
-                    sw = 1.0 - x * x * x * (10.0 - 15.0 * x + 6.0 * x * x)
-                    dsw = -30.0 * x * x * (1.0 - x) * (1.0 - x) * inv_ang
-                    if eta < 0.0:
-                        dsw = -dsw
-                if not sw > 0.0:
-                    continue
-                # distance weight K(r), Eq. (C1)-(C2): Fermi step times the C2 switch
-                f = 1.0 / (1.0 + math.exp((rn - delta) * inv_range))
-                df = -f * (1.0 - f) * inv_range
+                    s2 = x * x * x * (10.0 - 15.0 * x + 6.0 * x * x)
+                    ds2 = 30.0 * x * x * (1.0 - x) * (1.0 - x)
+                psi = s1 - s2
+                dpsi = ds1 - ds2
+                # weight w(r): flat to delta, (1 + x) exp(-x) beyond, C2 switch r_s..r_c
+                if rn <= delta:
+                    W = 1.0
+                    dW = 0.0
+                else:
+                    x = (rn - delta) * inv_rho
+                    ex = math.exp(-x)
+                    W = (1.0 + x) * ex
+                    dW = -x * ex * inv_rho
                 y = (rn - r_s) * inv_sw
-                if y <= 0.0:
-                    cs = 1.0
-                    dcs = 0.0
-                else:
+                if y > 0.0:
                     cs = 1.0 - y * y * y * (10.0 - 15.0 * y + 6.0 * y * y)
                     dcs = -30.0 * y * y * (1.0 - y) * (1.0 - y) * inv_sw
-                K = amplitude * f * cs
-                dK = amplitude * (df * cs + f * dcs)
-                live = True
-                # cos, sin, tan(/2) of the folded angle from c and s (no more transcendentals)
-                rho2 = c * c + s * s
-                inv_rho = 1.0 / math.sqrt(rho2)
-                cos_e = abs(c) * inv_rho
-                sin_e = (s if c > 0.0 else -s) * inv_rho
-                sq = math.sqrt(cos_e)
-                th = sin_e / (1.0 + cos_e)
-                e2 = eta * eta
-                n = ncoef[0]
-                dn = 0.0
-                for t in range(1, nd):
-                    dn = dn * e2 + n
-                    n = n * e2 + ncoef[t]
-                dn = dn * 2.0 * eta
-                inv_n = 1.0 / n
-                h = th * sq * sw * inv_n
-                dh = (0.5 * (1.0 + th * th) * sq * sw
-                      - th * sin_e / (2.0 * sq) * sw
-                      + th * sq * dsw) * inv_n - h * dn * inv_n
-                G = rho2 * h
-                dGc = 2.0 * c * h - s * dh
-                dGs = 2.0 * s * h + c * dh
-                wK = w * K
-                e_tot += wK * G
-                kg += K * G * inv_q2
-                # dE/dr = w dK G d + (w K dG/ds / |r|) (cr - s d)
-                u = w * dK * G
-                v = wK * dGs * inv_rn
-                dr0 = u * d0 + v * (cr0 - s * d0)
-                dr1 = u * d1 + v * (cr1 - s * d1)
-                dr2 = u * d2 + v * (cr2 - s * d2)
-                # dE/dt_a = wK (dGc t_b + dGs t_b x d); dE/dt_b = wK (dGc t_a + dGs d x t_a)
-                gta0 += wK * (dGc * tb0 + dGs * (tb1 * d2 - tb2 * d1))
-                gta1 += wK * (dGc * tb1 + dGs * (tb2 * d0 - tb0 * d2))
-                gta2 += wK * (dGc * tb2 + dGs * (tb0 * d1 - tb1 * d0))
-                gtb0 += wK * (dGc * ta0 + dGs * (d1 * ta2 - d2 * ta1))
-                gtb1 += wK * (dGc * ta1 + dGs * (d2 * ta0 - d0 * ta2))
-                gtb2 += wK * (dGc * ta2 + dGs * (d0 * ta1 - d1 * ta0))
-                # r = p_b - p_a, p_a = (1 - fk) x_i0 + fk x_i1, p_b = (1 - fm) x_j0 + fm x_j1
-                ga00 -= (1.0 - fk) * dr0
-                ga01 -= (1.0 - fk) * dr1
-                ga02 -= (1.0 - fk) * dr2
-                ga10 -= fk * dr0
-                ga11 -= fk * dr1
-                ga12 -= fk * dr2
-                gb00 += (1.0 - fm) * dr0
-                gb01 += (1.0 - fm) * dr1
-                gb02 += (1.0 - fm) * dr2
-                gb10 += fm * dr0
-                gb11 += fm * dr1
-                gb12 += fm * dr2
-        if not live:
-            continue
-        # t and l depend on e = x1 - x0 only: dt/de = (I - t t^T)/l, dl/de = t
-        pa = gta0 * ta0 + gta1 * ta1 + gta2 * ta2
-        pb = gtb0 * tb0 + gtb1 * tb1 + gtb2 * tb2
-        ila = 1.0 / la
-        ilb = 1.0 / lb
-        da0 = (gta0 - pa * ta0) * ila + lb * kg * ta0
-        da1 = (gta1 - pa * ta1) * ila + lb * kg * ta1
-        da2 = (gta2 - pa * ta2) * ila + lb * kg * ta2
-        db0 = (gtb0 - pb * tb0) * ilb + la * kg * tb0
-        db1 = (gtb1 - pb * tb1) * ilb + la * kg * tb1
-        db2 = (gtb2 - pb * tb2) * ilb + la * kg * tb2
-        out[i0, 0] += scale * (ga00 - da0)
-        out[i0, 1] += scale * (ga01 - da1)
-        out[i0, 2] += scale * (ga02 - da2)
-        out[i1, 0] += scale * (ga10 + da0)
-        out[i1, 1] += scale * (ga11 + da1)
-        out[i1, 2] += scale * (ga12 + da2)
-        out[j0, 0] += scale * (gb00 - db0)
-        out[j0, 1] += scale * (gb01 - db1)
-        out[j0, 2] += scale * (gb02 - db2)
-        out[j1, 0] += scale * (gb10 + db0)
-        out[j1, 1] += scale * (gb11 + db1)
-        out[j1, 2] += scale * (gb12 + db2)
+                    dW = dW * cs + W * dcs
+                    W = W * cs
+                # angular factor G = c s rho / (rho + |c|)
+                rh = math.sqrt(c * c + s * s)
+                if not rh > 1e-12:
+                    continue
+                A = rh + abs(c)
+                G = c * s * rh / A
+                sg = 1.0 if c > 0.0 else (-1.0 if c < 0.0 else 0.0)
+                dGc = s * rh / A + c * s * (c / rh) / A - G * (c / rh + sg) / A
+                dGs = c * rh / A + c * s * (s / rh) / A - G * (s / rh) / A
+                lq = la * inv_q
+                e_tot += 0.5 * lq * psi * W * G
+                h = 0.5  # each direction carries half
+                g_la = h * psi * W * G * inv_q
+                g_t = h * lq * dpsi * W * G
+                u = h * lq * psi * dW * G
+                v = h * lq * psi * W * dGs * inv_rn
+                gr0 = u * d0 + v * (cr0 - s * d0)
+                gr1 = u * d1 + v * (cr1 - s * d1)
+                gr2 = u * d2 + v * (cr2 - s * d2)
+                kk = h * lq * psi * W
+                # tb x d, d x ta
+                bxd0 = tb1 * d2 - tb2 * d1
+                bxd1 = tb2 * d0 - tb0 * d2
+                bxd2 = tb0 * d1 - tb1 * d0
+                dxa0 = d1 * ta2 - d2 * ta1
+                dxa1 = d2 * ta0 - d0 * ta2
+                dxa2 = d0 * ta1 - d1 * ta0
+                gta0 = kk * (dGc * tb0 + dGs * bxd0)
+                gta1 = kk * (dGc * tb1 + dGs * bxd1)
+                gta2 = kk * (dGc * tb2 + dGs * bxd2)
+                gtb0 = kk * (dGc * ta0 + dGs * dxa0)
+                gtb1 = kk * (dGc * ta1 + dGs * dxa1)
+                gtb2 = kk * (dGc * ta2 + dGs * dxa2)
+                g_tt = g_t + gr0 * eb0 + gr1 * eb1 + gr2 * eb2
+                iL = g_tt / L2
+                gw0 = -gr0 + iL * eb0
+                gw1 = -gr1 + iL * eb1
+                gw2 = -gr2 + iL * eb2
+                pb = gtb0 * tb0 + gtb1 * tb1 + gtb2 * tb2
+                geb0 = t * gr0 + iL * (w0 - 2.0 * t * eb0) + (gtb0 - pb * tb0) / lb
+                geb1 = t * gr1 + iL * (w1 - 2.0 * t * eb1) + (gtb1 - pb * tb1) / lb
+                geb2 = t * gr2 + iL * (w2 - 2.0 * t * eb2) + (gtb2 - pb * tb2) / lb
+                pa = gta0 * ta0 + gta1 * ta1 + gta2 * ta2
+                gea0 = (gta0 - pa * ta0) / la + g_la * ta0 + f * gw0
+                gea1 = (gta1 - pa * ta1) / la + g_la * ta1 + f * gw1
+                gea2 = (gta2 - pa * ta2) / la + g_la * ta2 + f * gw2
+                ga00 += gw0 - gea0
+                ga01 += gw1 - gea1
+                ga02 += gw2 - gea2
+                ga10 += gea0
+                ga11 += gea1
+                ga12 += gea2
+                gb00 += -gw0 - geb0
+                gb01 += -gw1 - geb1
+                gb02 += -gw2 - geb2
+                gb10 += geb0
+                gb11 += geb1
+                gb12 += geb2
+            out[i0, 0] += scale * ga00
+            out[i0, 1] += scale * ga01
+            out[i0, 2] += scale * ga02
+            out[i1, 0] += scale * ga10
+            out[i1, 1] += scale * ga11
+            out[i1, 2] += scale * ga12
+            out[j0, 0] += scale * gb00
+            out[j0, 1] += scale * gb01
+            out[j0, 2] += scale * gb02
+            out[j1, 0] += scale * gb10
+            out[j1, 1] += scale * gb11
+            out[j1, 2] += scale * gb12
     return e_tot
 
 
@@ -576,9 +482,7 @@ def pair_terms_numba(pos, seg, a, b, kernel, q):
     grad = np.zeros_like(pos)
     e = _jit(_pair_loop)(pos, np.ascontiguousarray(seg, np.int64),
                          np.ascontiguousarray(a, np.int64), np.ascontiguousarray(b, np.int64),
-                         int(q), kernel.delta, kernel.range, kernel.amplitude, kernel.r_s,
-                         kernel.r_c, kernel.eta_on,
-                         np.ascontiguousarray(kernel.ncoef, np.float64), 1.0, grad)
+                         int(q), kernel.delta, kernel.range, kernel.r_s, kernel.r_c, 1.0, grad)
     return float(e), grad
 
 
@@ -649,14 +553,14 @@ class ChiralEvaluator:
         if self.uses_numba:
             self._a, self._b = _jit(_build_loop)(
                 pos, self.seg, self._cid, self._pic, self._nseg, self._ring,
-                self.exclude_neighbours, self.kernel.r_c + self.skin)
+                self.exclude_neighbours, self._reach(pos))
             self._ref = pos.copy()
             self.n_builds += 1
             return
         x0, x1 = pos[self.seg[:, 0]], pos[self.seg[:, 1]]
         mid = 0.5 * (x0 + x1)
         ln = np.linalg.norm(x1 - x0, axis=1)
-        reach = self.kernel.r_c + self.skin
+        reach = self._reach(pos)
         a, b = grid_pairs(mid, reach + float(ln.max()))
         d = np.linalg.norm(mid[b] - mid[a], axis=1)
         keep = d < reach + 0.5 * (ln[a] + ln[b])
@@ -666,6 +570,14 @@ class ChiralEvaluator:
         self._a, self._b = a[keep], b[keep]
         self._ref = pos.copy()
         self.n_builds += 1
+
+    def _reach(self, pos):
+        """Verlet reach: a direction needs |m_u - m_v| < r_c + l_u/2 + l_v, and between builds
+        midpoints move by < skin/2 and lengths change by < skin; the list keeps
+        |m_a - m_b| < reach + (l_a + l_b)/2, reach = r_c + 2.5 skin + l_max/2."""
+        e = pos[self.seg[:, 1]] - pos[self.seg[:, 0]]
+        lmax = float(np.sqrt(np.max(np.sum(e * e, axis=1)))) if len(e) else 0.0
+        return self.kernel.r_c + 2.5 * self.skin + 0.5 * lmax
 
     @property
     def uses_numba(self):
@@ -690,8 +602,7 @@ class ChiralEvaluator:
         a, b = self.candidate_pairs(pos)
         k = self.kernel
         if self._kpar is None:
-            self._kpar = (k.delta, k.range, k.amplitude, k.r_s, k.r_c, k.eta_on,
-                          np.ascontiguousarray(k.ncoef, np.float64))
+            self._kpar = (k.delta, k.range, k.r_s, k.r_c)
         return _jit(_pair_loop)(pos, self.seg, a, b, self.q, *self._kpar, scale, out)
 
     def energy_grad(self, pos):
@@ -706,7 +617,7 @@ class ChiralEvaluator:
             mid = 0.5 * (x0 + x1)
             ln = np.linalg.norm(x1 - x0, axis=1)
             d2 = np.sum((mid[b] - mid[a]) ** 2, axis=1)
-            lim = self.kernel.r_c + 0.5 * (ln[a] + ln[b])
+            lim = self.kernel.r_c + ln[a] + ln[b]
             keep = d2 < lim * lim
             a, b = a[keep], b[keep]
         return pair_terms_fast(pos, self.seg, a, b, self.kernel, self.q)

@@ -38,6 +38,7 @@ exactly parallel segments (a kink of measure zero).
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable, Sequence
 
 import numpy as np
@@ -54,6 +55,8 @@ __all__ = [
     "contact_energy",
     "contact_gradient_hessian",
     "segment_contact_force",
+    "capsule_force",
+    "CapsuleEvaluator",
 ]
 
 _TINY = 1e-300
@@ -438,3 +441,207 @@ def _frozen_force(quads, x, name, pre, D, k):
         else:
             f.addBond([p_end, q_end, int(q[0]), int(q[2])], [2.0])
     return f
+
+
+# ------------------------------------------------------------------------------------------
+# Thermal variant: the same one-sided harmonic capsule contact as an openmm.PythonForce with
+# a Verlet list of segment pairs on different chains (the excluded volume between strands of
+# the tweezer scenes, contact="capsules"). The Lepton force above lists its pairs once and
+# takes minutes to compile on the CPU platform; this one evaluates only the listed
+# candidates with a compiled loop (numba, as the chiral force) or numpy.
+# ------------------------------------------------------------------------------------------
+
+
+def _capsule_loop(pos, seg, a, b, D, k, scale, out):
+    """U = sum k/2 (D - d)^2 over the pairs (a, b) with d < D; adds scale * dU/dx to ``out``.
+
+    The closest points are those of :func:`segment_distance` (Ericson 2005, Sec. 5.1.9), and
+    dd/dx is the partial derivative at the minimiser (Danskin). Returns U (pN nm if k is in
+    pN/nm)."""
+    e_tot = 0.0
+    for p in range(a.shape[0]):
+        i0 = seg[a[p], 0]
+        i1 = seg[a[p], 1]
+        j0 = seg[b[p], 0]
+        j1 = seg[b[p], 1]
+        u0 = pos[i1, 0] - pos[i0, 0]
+        u1 = pos[i1, 1] - pos[i0, 1]
+        u2 = pos[i1, 2] - pos[i0, 2]
+        v0 = pos[j1, 0] - pos[j0, 0]
+        v1 = pos[j1, 1] - pos[j0, 1]
+        v2 = pos[j1, 2] - pos[j0, 2]
+        w0 = pos[i0, 0] - pos[j0, 0]
+        w1 = pos[i0, 1] - pos[j0, 1]
+        w2 = pos[i0, 2] - pos[j0, 2]
+        aa = u0 * u0 + u1 * u1 + u2 * u2
+        ee = v0 * v0 + v1 * v1 + v2 * v2
+        bb = u0 * v0 + u1 * v1 + u2 * v2
+        cc = u0 * w0 + u1 * w1 + u2 * w2
+        ff = v0 * w0 + v1 * w1 + v2 * w2
+        den = aa * ee - bb * bb
+        s = (bb * ff - cc * ee) / den if den > 1e-14 * aa * ee else 0.0
+        s = min(1.0, max(0.0, s))
+        t = min(1.0, max(0.0, (bb * s + ff) / ee)) if ee > 1e-300 else 0.0
+        s = min(1.0, max(0.0, (bb * t - cc) / aa)) if aa > 1e-300 else 0.0
+        r0 = w0 + s * u0 - t * v0
+        r1 = w1 + s * u1 - t * v1
+        r2 = w2 + s * u2 - t * v2
+        d = math.sqrt(r0 * r0 + r1 * r1 + r2 * r2)
+        if not d < D:
+            continue
+        pen = D - d
+        e_tot += 0.5 * k * pen * pen
+        dd = max(d, 1e-12 * D)
+        g = -k * pen / dd * scale  # dU/dd times the unit vector's 1/d
+        n0 = g * r0
+        n1 = g * r1
+        n2 = g * r2
+        out[i0, 0] += (1.0 - s) * n0
+        out[i0, 1] += (1.0 - s) * n1
+        out[i0, 2] += (1.0 - s) * n2
+        out[i1, 0] += s * n0
+        out[i1, 1] += s * n1
+        out[i1, 2] += s * n2
+        out[j0, 0] -= (1.0 - t) * n0
+        out[j0, 1] -= (1.0 - t) * n1
+        out[j0, 2] -= (1.0 - t) * n2
+        out[j1, 0] -= t * n0
+        out[j1, 1] -= t * n1
+        out[j1, 2] -= t * n2
+    return e_tot
+
+
+class CapsuleEvaluator:
+    """Picklable callable for the capsule PythonForce (local particle numbering).
+
+    Keeps a Verlet list of segment pairs on different chains with midpoints closer than
+    D + 2.5 skin + l_max/2 + (l_a + l_b)/2 (a pair can touch only if
+    |m_a - m_b| < D + (l_a + l_b)/2; between builds no bead moves more than skin/2, so
+    midpoints move < skin/2 and lengths change < skin). Counters ``n_calls``, ``n_builds``.
+    """
+
+    def __init__(self, seg, chain_id, contact_nm, skin_nm, parameter, backend="auto"):
+        from .chiral import HAVE_NUMBA
+
+        if backend not in ("auto", "numba", "numpy"):
+            raise ValueError(f"backend must be 'auto', 'numba' or 'numpy', got {backend!r}")
+        self.seg = np.ascontiguousarray(seg, np.int64)
+        self.chain_id = np.ascontiguousarray(chain_id, np.int64)
+        self.contact = float(contact_nm)
+        self.skin = float(skin_nm)
+        self.parameter = parameter
+        self.numba = backend == "numba" or (backend == "auto" and HAVE_NUMBA)
+        self.n_calls = 0
+        self.n_builds = 0
+        self._ref = None
+        self._a = self._b = np.zeros(0, np.int64)
+
+    def __getstate__(self):
+        st = self.__dict__.copy()
+        st["_ref"] = None
+        return st
+
+    def _build(self, pos):
+        x0, x1 = pos[self.seg[:, 0]], pos[self.seg[:, 1]]
+        ln = np.linalg.norm(x1 - x0, axis=1)
+        reach = self.contact + 2.5 * self.skin + 0.5 * float(ln.max())
+        if self.numba:
+            from .chiral import _build_loop, _jit
+
+            zero = np.zeros(len(self.seg), np.int64)
+            self._a, self._b = _jit(_build_loop)(
+                pos, self.seg, self.chain_id, zero, zero, np.zeros(len(self.seg), np.bool_),
+                2**62, reach)
+        else:
+            from .chiral import grid_pairs
+
+            mid = 0.5 * (x0 + x1)
+            a, b = grid_pairs(mid, reach + float(ln.max()))
+            d = np.linalg.norm(mid[b] - mid[a], axis=1)
+            keep = (d < reach + 0.5 * (ln[a] + ln[b])) & (self.chain_id[a] != self.chain_id[b])
+            self._a, self._b = a[keep], b[keep]
+        self._ref = pos.copy()
+        self.n_builds += 1
+
+    def candidate_pairs(self, pos):
+        if self._ref is None or self._ref.shape != pos.shape:
+            self._build(pos)
+        elif np.max(np.sum((pos - self._ref) ** 2, axis=1)) > 0.25 * self.skin**2:
+            self._build(pos)
+        return self._a, self._b
+
+    def energy_grad(self, pos, k_pN_per_nm):
+        """(U in pN nm, dU/dx in pN) at stiffness ``k_pN_per_nm``."""
+        pos = np.ascontiguousarray(pos, np.float64)
+        a, b = self.candidate_pairs(pos)
+        grad = np.zeros_like(pos)
+        if self.numba:
+            from .chiral import _jit
+
+            e = _jit(_capsule_loop)(pos, self.seg, a, b, self.contact, float(k_pN_per_nm),
+                                    1.0, grad)
+            return float(e), grad
+        pairs = np.column_stack([a, b])
+        e = contact_energy(pos, self.seg, pairs, self.contact, k_pN_per_nm)
+        if len(pairs):
+            nodes, (p0, p1, q0, q1), d, s, t = _pair_geometry(pos, self.seg, pairs)
+            act = d < self.contact
+            r = (p0 + s[:, None] * (p1 - p0)) - (q0 + t[:, None] * (q1 - q0))
+            coef = np.where(act, -float(k_pN_per_nm) * (self.contact - d)
+                            / np.maximum(d, 1e-12 * self.contact), 0.0)
+            n = coef[:, None] * r
+            for col, c in enumerate((1.0 - s, s, -(1.0 - t), -t)):
+                np.add.at(grad, nodes[:, col], c[:, None] * n)
+        return e, grad
+
+    def __call__(self, state):
+        self.n_calls += 1
+        pos = np.ascontiguousarray(state.getPositions(asNumpy=True)._value, np.float64)
+        k = state.getParameters()[self.parameter]  # kJ/mol/nm^2
+        e, g = self.energy_grad(pos, k)  # kJ/mol, kJ/mol/nm
+        return e, -g
+
+
+def capsule_force(chains, contact_nm: float, k_pN_per_nm: float, *, skin_nm: float = 1.0,
+                  name: str = "capsule", backend: str = "auto"):
+    """Capsule excluded volume between the segments of different ``chains``: a PythonForce.
+
+    U = sum k/2 (D_c - d)^2 for d < D_c, d the closest distance of two segments on different
+    chains (:func:`contact_energy` is its numpy twin). Unloaded, two strands touch at exactly
+    D_c whatever the beads' register: the contact distance of the chiral weight and of the
+    continuum cross-checks.
+
+    Parameters
+    ----------
+    chains : list of int arrays
+        Ordered particle indices of each strand (global numbering).
+    contact_nm : float
+        D_c (nm).
+    k_pN_per_nm : float
+        Stiffness; the global parameter ``<name>_k`` holds it in kJ/mol/nm^2.
+    skin_nm : float
+        Verlet-list skin.
+    backend : {"auto", "numba", "numpy"}
+
+    Returns
+    -------
+    openmm.PythonForce
+    """
+    import openmm
+
+    from .reference_chiral import segments_of
+
+    if not (contact_nm > 0 and k_pN_per_nm > 0 and skin_nm > 0):
+        raise ValueError(f"capsule_force: contact_nm, k_pN_per_nm and skin_nm must be > 0, got "
+                         f"{contact_nm!r}, {k_pN_per_nm!r}, {skin_nm!r}")
+    chains = [np.asarray(c, dtype=np.int64).ravel() for c in chains]
+    particles = np.unique(np.concatenate(chains))
+    local = {int(p): i for i, p in enumerate(particles)}
+    seg, cid, _, _, _ = segments_of(chains)
+    seg_local = np.vectorize(local.__getitem__, otypes=[np.int64])(seg)
+    parameter = f"{name}_k"
+    ev = CapsuleEvaluator(seg_local, cid, contact_nm, skin_nm, parameter, backend=backend)
+    force = openmm.PythonForce(ev, {parameter: float(k_pN_per_nm) * PN_NM_IN_KJ_MOL})
+    force.setParticles([int(p) for p in particles])
+    force.setName(name)
+    return force

@@ -35,6 +35,8 @@ from .tweezer_base import TurnedScene, lockup_turns
 
 #: values of the ``mirror`` key
 MIRROR_MODES = ("off", "original", "image")
+#: values of the ``contact`` key
+CONTACT_MODES = ("beads", "capsules")
 #: largest bow of an overdispersed start's braid axis, as a fraction of the strand length
 MAX_START_BOW = 0.25
 #: Draws of a replica's built start before it is declared impossible (StartError).
@@ -99,11 +101,19 @@ class Braid(TurnedScene):
                       "pair with one seed and negated turn lists: the image starts from and is "
                       "driven by the y -> -y mirror of the original's start and noise "
                       "(dnabraid.analysis.mirror)")
+    contact: str = key("beads", "", "excluded volume between the two strands: 'beads' (WCA "
+                       "between beads, contact ~2^(1/6) d) or 'capsules' (segment-segment "
+                       "contact k/2 (D_c - d)^2 at D_c = d, the contact distance the chiral "
+                       "weight and the continuum cross-checks use; docs/chirality.md)")
 
     def validate(self) -> None:
         super().validate()
         need = self.need
         need(self.mirror in MIRROR_MODES, "mirror", f"must be one of {MIRROR_MODES}")
+        need(self.contact in CONTACT_MODES, "contact", f"must be one of {CONTACT_MODES}")
+        need(not (self.mc_moves > 0 and self.contact == "capsules"), "mc_moves",
+             "the compiled Metropolis moves cannot evaluate the capsule contact (nor the "
+             "chiral term); set mc_moves=0 with contact='capsules'")
         need(0.0 <= self.start_spread <= 1.0, "start_spread", "must be in [0, 1]")
         d = self.effective_diameter_nm
         need(self.tether_separation_nm >= d, "tether_separation_nm",
@@ -146,7 +156,12 @@ class Braid(TurnedScene):
         mu = 1.0 / d.zeta_bead
         kit.add_stretch(self.stretch)
         kit.add_bend()
-        n_excl = kit.add_excluded_volume([tuple(att), tuple(fixed)])
+        extra = [tuple(att), tuple(fixed)]
+        if self.contact == "capsules":  # the strands meet through their segments only
+            extra += [(int(i), int(j)) for i in chains[0] for j in chains[1]]
+        n_excl = kit.add_excluded_volume(extra)
+        if self.contact == "capsules":
+            kit.add_capsule_contact(chains)
         if self.surface:
             kit.add_wall()
         zeta_phys = units.stokes_friction(self.bead_radius_nm)

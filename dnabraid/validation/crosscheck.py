@@ -24,7 +24,7 @@ import numpy as np
 from ..geometry.curves import catenation_number
 from ..scenes import make_scene
 from ..scenes.braid import LONG_BRAID
-from ..units import TWO_PI
+from ..units import PN_NM_IN_KJ_MOL, TWO_PI
 
 #: The braid the cross-checks run unless overridden: the long braid (2 x 200 nm at 2 pN),
 #: a developed two-ply at n = 2, on which the tolerances of tests/test_handedness.py and
@@ -46,8 +46,17 @@ class ZeroTBraid:
     wall_time_s: float
 
 
+def segment_gap(c0, c1) -> np.ndarray:
+    """For each segment of polyline ``c0``, its closest distance to polyline ``c1`` (nm)."""
+    from ..forces.segment_contact import segment_distance
+
+    d, _, _ = segment_distance(c0[:-1, None], c0[1:, None], c1[None, :-1], c1[None, 1:])
+    return d.min(axis=1)
+
+
 def zero_temperature_braid(turns: float, overrides: dict | None = None, *, increments: int = 40,
-                           tolerance_pN: float = 0.01) -> ZeroTBraid:
+                           tolerance_pN: float = 0.01, chiral_after: bool = False
+                           ) -> ZeroTBraid:
     """Braid the bead model quasi-statically at T = 0 (see the module docstring).
 
     Parameters
@@ -61,6 +70,11 @@ def zero_temperature_braid(turns: float, overrides: dict | None = None, *, incre
         Trap-angle increments from 0 to 2 pi n, each followed by a minimisation.
     tolerance_pN : float
         Force tolerance of OpenMM's L-BFGS minimiser (a final pass uses 1/10 of it).
+    chiral_after : bool
+        Form the braid with the chiral term off (its parameter at 0) and switch it on at
+        the end, then minimise: the braid in contact, the branch the continuum describes
+        (formed with the term on, a disfavoured hand can stop short of contact where the
+        chiral weight's decay balances the contact pressure; docs/chirality.md).
     """
     from ..run.engine import Engine
 
@@ -69,10 +83,15 @@ def zero_temperature_braid(turns: float, overrides: dict | None = None, *, incre
     s = make_scene("braid", over)
     m = s.build()
     e = Engine.for_model(m, seed=s.seed, threads=1)
+    chiral = chiral_after and s.alpha != 0.0
+    if chiral:
+        e.set_parameter("chiral_alpha", 0.0)
     e.minimise(tolerance_pN=tolerance_pN, max_iterations=20000)
     for k in range(1, increments + 1):
         e.set_parameter("trap_angle", TWO_PI * turns * k / increments)
         e.minimise(tolerance_pN=tolerance_pN, max_iterations=20000)
+    if chiral:
+        e.set_parameter("chiral_alpha", s.alpha * PN_NM_IN_KJ_MOL)
     for _ in range(3):
         e.minimise(tolerance_pN=0.1 * tolerance_pN, max_iterations=50000)
     pos = e.positions()
@@ -80,7 +99,10 @@ def zero_temperature_braid(turns: float, overrides: dict | None = None, *, incre
     u = pos[a[1]] - pos[a[0]]
     lag = (math.atan2(u[1], u[0]) - TWO_PI * turns + math.pi) % TWO_PI - math.pi
     c0, c1 = pos[m.chains[0]], pos[m.chains[1]]
-    dmin = np.linalg.norm(c0[:, None] - c1[None], axis=2).min(axis=1)
+    if getattr(s, "contact", "beads") == "capsules":
+        dmin = segment_gap(c0, c1)
+    else:
+        dmin = np.linalg.norm(c0[:, None] - c1[None], axis=2).min(axis=1)
     k = len(dmin)
     return ZeroTBraid(float(turns), s.alpha, float(pos[a, 2].mean()),
                       float(-s.trap_stiffness_pN_nm * math.sin(lag)),
