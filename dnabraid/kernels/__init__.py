@@ -4,7 +4,9 @@ energy change of a few particles in microseconds instead of a whole-Context eval
 :class:`~dnabraid.kernels.chain.LocalEnergy` reproduces the terms of a bead chain
 (harmonic bonds, bending hinges, WCA excluded volume, wall, pull) from a built
 :class:`dnabraid.chains.Model`; :mod:`dnabraid.run.chain_moves` drives Metropolis
-crankshaft, pivot and bead moves with it.
+crankshaft, pivot and bead moves with it. :mod:`~dnabraid.kernels.twist` adds the terms of
+torsionally constrained DNA (twist joints and clamps, frame springs, the bead's plane) and
+the twist-aware move loop of :mod:`dnabraid.run.twist_moves`.
 """
 
 from .chain import TERMS, LocalEnergy

@@ -19,10 +19,13 @@ model's ``openmm.System`` (its parameters converted from kJ/mol once, with
   U = k/2 (z_w - z)^2 for z < z_w, for the force's particles;
 * ``pull`` (``CustomExternalForce``, :func:`dnabraid.forces.pull_force`):
   U = -F share_i z_i.
+* ``frame``, ``twist`` and the bead's plane ``beadwall`` of torsionally constrained DNA
+  (the plectoneme: frame springs, twist joints and clamps,
+  :mod:`dnabraid.forces.twist_frames`): twins in :mod:`dnabraid.kernels.twist`.
 
 A Force is recognised by its name and type and its energy expression is checked against
 the expression its factory writes, so a changed factory fails loudly here instead of
-silently differing. A System with any other Force (a trap, the chiral term, twist frames)
+silently differing. A System with any other Force (the chiral term, a changed factory)
 is refused: :class:`LocalEnergy` would not know its energy.
 
 Pairs within the WCA range are found with a spatial hash: a uniform grid of cells of
@@ -67,11 +70,13 @@ from ..forces import (
     wca_force,
 )
 from ..units import PN_NM_IN_KJ_MOL
+from . import twist as _tw
 
 __all__ = ["LocalEnergy", "TERMS", "run_chain_moves"]
 
 #: The terms a :class:`LocalEnergy` knows, in the order of its term arrays.
-TERMS = ("stretch", "bend", "wca", "wall", "pull", "link", "trap", "beadwall")
+TERMS = ("stretch", "bend", "wca", "wall", "pull", "link", "trap", "beadwall", "frame",
+         "twist")
 #: Number of terms (length of every per-term array).
 NTERMS = len(TERMS)
 
@@ -103,6 +108,12 @@ _Params = namedtuple("_Params", [
     "has_pull", "share", "pull_f",
     # trap: particles (t_i, t_j), K (pN nm), cos and sin of the angle, tilt k (pN/nm)
     "has_trap", "t_i", "t_j", "trap_K", "trap_c", "trap_s", "trap_kt",
+    # twist joints (dnabraid.kernels.twist): type (0 interior, 1 surface clamp, 2 bead
+    # clamp), particles (padded with -1) and their number, g (pN nm), fixed vectors (clamp
+    # tangent and material vector, or bead axis); per-particle CSR of the joints it is in
+    "has_twist", "j_type", "j_p", "j_np", "j_g", "j_vec", "j_ptr", "j_list",
+    # the bead's plane (beadwall of a plectoneme): attachment, per-particle bond count, k
+    "has_plane", "pl_att", "pl_on", "pl_cnt", "pl_k",
 ])
 
 _Hash = namedtuple("_Hash", ["head", "nxt", "key", "bucket", "inv_cell", "mask"])
@@ -333,6 +344,10 @@ def _total(pos, P, out):
         i = P.t_i
         j = P.t_j
         out[6] = _trap_e(pos[i, 0], pos[i, 1], pos[i, 2], pos[j, 0], pos[j, 1], pos[j, 2], P)
+    if P.has_plane:
+        out[7] += _tw.plane_total(pos, P)
+    if P.has_twist:
+        out[9] = _tw.twist_total(pos, P)
 
 
 @numba.njit(cache=True)
@@ -398,6 +413,10 @@ def delta_kernel(pos, idx, new, moved, rigid, P, H, out, thr, ncon, dcon, flip, 
             out[3] += _wall_e(new[a, 2], P) - _wall_e(pos[p, 2], P)
         if P.has_pull and P.share[p] != 0.0:
             out[4] -= P.pull_f * P.share[p] * (new[a, 2] - pos[p, 2])
+    if P.has_twist:
+        out[9] += _tw.twist_delta(pos, idx, new, moved, rigid, P)
+    if P.has_plane:
+        out[7] += _tw.plane_delta(pos, idx, new, moved, P)
     if P.has_trap and (moved[P.t_i] > 0 or moved[P.t_j] > 0):
         # (not skipped for rigid moves: a rotation about a tilted axis turns the chord)
         i = P.t_i
@@ -804,13 +823,18 @@ class LocalEnergy:
                  has_wall=False, wall_on=np.zeros(n, np.uint8), wall_k=0.0, wall_z=0.0,
                  has_pull=False, share=np.zeros(n), pull_f=0.0,
                  has_trap=False, t_i=0, t_j=0, trap_K=0.0, trap_c=1.0, trap_s=0.0,
-                 trap_kt=0.0)
+                 trap_kt=0.0, has_twist=False, j_type=z, j_p=np.zeros((0, 5), np.int64),
+                 j_np=z, j_g=fz, j_vec=np.zeros((0, 6)), j_ptr=np.zeros(n + 1, np.int64),
+                 j_list=z, has_plane=False, pl_att=0, pl_on=np.zeros(n, np.uint8),
+                 pl_cnt=np.zeros(n), pl_k=0.0)
         present = []
-        bonds = []  # (i, j, k, r0, term, one-sided) of stretch, link, beadwall
+        bonds = []  # (i, j, k, r0, term, one-sided) of stretch, link, beadwall, frame
+        joints = []  # (type, particles, g, fixed vectors) of the twist forces
         self._trap_angle = None
         for f in system.getForces():
             name = f.getName()
-            if name in ("stretch", "link") and isinstance(f, openmm.HarmonicBondForce):
+            if name in ("stretch", "link", "frame") and isinstance(f,
+                                                                  openmm.HarmonicBondForce):
                 t = TERMS.index(name)
                 for b in range(f.getNumBonds()):
                     i, j, r, kk = f.getBondParameters(b)
@@ -824,6 +848,11 @@ class LocalEnergy:
                 for b in range(f.getNumBonds()):
                     i, j, _ = f.getBondParameters(b)
                     bonds.append((i, j, k, r0, TERMS.index(name), 1))
+            elif name in _tw.TWIST_NAMES and isinstance(f, openmm.CustomCompoundBondForce):
+                joints.extend(_tw.read_twist_force(f))
+                name = "twist"
+            elif name == "beadwall" and isinstance(f, openmm.CustomCompoundBondForce):
+                p.update(_tw.read_plane_force(f, n))
             elif name == "trap" and isinstance(f, openmm.CustomCompoundBondForce):
                 _check_expr(f, trap_force(0, 1, 1.0, name=name).getEnergyFunction())
                 if f.getNumBonds() != 1:
@@ -874,6 +903,8 @@ class LocalEnergy:
                      b_r0=np.array([b[3] for b in bonds], float),
                      b_t=np.array([b[4] for b in bonds], np.int64),
                      b_one=np.array([b[5] for b in bonds], np.uint8), b_ptr=ptr, b_list=lst)
+        if joints:
+            p.update(_tw.joint_params(n, joints))
         self.terms = tuple(t for t in TERMS if t in present)
         self.params = _Params(**p)
         self._out = np.zeros(NTERMS)

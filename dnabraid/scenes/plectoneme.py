@@ -8,11 +8,21 @@ held horizontal at ``BEAD_ARM_NM`` from the attachment and turned by the rotatio
 the twist energy couples the surface frame (+z, +x), the bond frames and the bead frame
 (+z, m - r_att), so turning the bead changes the linking number. Side particles and m carry
 no excluded volume.
+
+Brownian dynamics relaxes the extension and the exchange of twist and writhe far too slowly
+for micrometre molecules; ``mc_moves`` twist-aware Metropolis moves after every report
+interval (crankshafts that carry the arc's frames, pivots of the top with the bead,
+frame rotations that carry twist along the chain, particle moves;
+:class:`dnabraid.run.twist_moves.PlectonemeMoves`, local energies from numba kernels,
+:mod:`dnabraid.kernels.twist`) sample the same Boltzmann distribution, the linking number
+kept (the rotation amplitudes are bounded by the distance a bead may sweep). Their time
+correlations are not physical: ``mc_moves = 0`` for kinetics.
 """
 
 from __future__ import annotations
 
 import dataclasses
+import math
 from typing import ClassVar
 
 import numpy as np
@@ -29,6 +39,7 @@ from ..forces.twist_frames import (
     twist_force,
 )
 from ..geometry.ribbon import writhe_open
+from ..run.twist_moves import SWEEP_NM, PlectonemeMoves
 from .base import SceneError, key
 from .tweezer_base import TurnedScene
 
@@ -44,6 +55,15 @@ FRAME_K_FRACTION = 0.05
 #: Distance of the bead's orientation particle m from the attachment (nm): the trap's
 #: tangential stiffness K / arm^2 and its rate stay moderate.
 BEAD_ARM_NM = 20.0
+
+#: Default Metropolis move attempts per report interval
+#: (workflows/benchmark_plectoneme_moves.py).
+MC_MOVES = 1000
+MC_MOVES_HELP = ("twist-aware Metropolis moves after every report interval (crankshaft, pivot, "
+                 "frame and particle moves 4:2:2:1; dnabraid.run.twist_moves): the same "
+                 "equilibrium, sampled far faster "
+                 "(workflows/results/benchmark_plectoneme_moves.txt). 0 = Brownian dynamics "
+                 "alone (physical kinetics; the moves' time correlations are not physical)")
 
 
 @dataclasses.dataclass(frozen=True)
@@ -63,9 +83,41 @@ class Plectoneme(TurnedScene):
         "twist persistence length C of torsionally constrained DNA (Moroz & Nelson 1997, "
         "Bryant et al. 2003: C ~ 100 nm; twist-stretch coupling is left out)")
 
+    mc_moves: int = key(MC_MOVES, "", MC_MOVES_HELP)
+    crank_angle_rad: float = key(1.0, "rad", "largest crankshaft angle (an arc of 1-12 beads "
+                                 "and its frames turned about the line through its two "
+                                 "neighbours; bounded further by sweep_nm)")
+    pivot_angle_rad: float = key(0.3, "rad", "largest pivot angle (the top beyond a bead, "
+                                 "frames and bead included, turned about it; bounded further "
+                                 "by sweep_nm)")
+    frame_angle_rad: float = key(0.3, "rad", "largest frame-rotation angle (a run of 1-40 "
+                                 "frames turned about their bonds: carries twist along the "
+                                 "chain)")
+    bead_move_nm: float = key(0.3, "nm", "radius of a single-particle displacement's ball "
+                              "(bond lengths, frame springs, the trap's tilt)")
+    sweep_nm: float = key(SWEEP_NM, "nm", "most distance a bead may travel in a crankshaft or "
+                          "pivot: keeps strands from passing through each other (the linking "
+                          "number); <= 3 nm keeps any passage behind a > 50 kT excluded-volume "
+                          "barrier at the default diameter")
+
     def validate(self) -> None:
         super().validate()
         need = self.need
+        need(self.mc_moves >= 0, "mc_moves", "must be >= 0 (0 = Brownian dynamics alone)")
+        for k in ("crank_angle_rad", "pivot_angle_rad", "frame_angle_rad"):
+            need(0 <= getattr(self, k) <= math.pi, k, "must be in [0, pi]")
+        need(self.bead_move_nm >= 0, "bead_move_nm", "must be >= 0")
+        need(self.sweep_nm > 0, "sweep_nm", "must be > 0")
+        if self.mc_moves > 0:
+            need(self.crank_angle_rad > 0 or self.pivot_angle_rad > 0
+                 or self.frame_angle_rad > 0 or self.bead_move_nm > 0, "mc_moves",
+                 "needs a move: crank_angle_rad, pivot_angle_rad, frame_angle_rad or "
+                 "bead_move_nm > 0")
+            need(self.stretch == "bonds", "mc_moves",
+                 "the Metropolis moves need stretch='bonds' (particle moves change bond "
+                 "lengths); set mc_moves=0 for rigid bonds")
+            need(self.alpha == 0.0, "mc_moves",
+                 "the moves' local energies have no chiral term; set alpha=0 or mc_moves=0")
         need(self.twist_persistence_nm >= self.bead_spacing_nm, "twist_persistence_nm",
              "must be >= bead_spacing_nm (a bead chain cannot resolve a shorter twist "
              "persistence)")
@@ -124,6 +176,15 @@ class Plectoneme(TurnedScene):
         kit.attachments = [att]
         kit.sides = sides
         kit.bead_orientation = m
+        if self.mc_moves > 0:
+            # the LocalEnergy is built from the finished System at the first call
+            kit.moves = PlectonemeMoves(kit.system, c0, sides, m, kit.fixed, kT,
+                                        moves_per_call=self.mc_moves,
+                                        crank_angle_rad=self.crank_angle_rad,
+                                        pivot_angle_rad=self.pivot_angle_rad,
+                                        frame_angle_rad=self.frame_angle_rad,
+                                        ball_nm=self.bead_move_nm, sweep_nm=self.sweep_nm,
+                                        seed=self.seed)
         return {"zeta_attach_pN_ns_per_nm": zeta_attach,
                 "zeta_center_pN_ns_per_nm": zeta_attach,
                 "zeta_bead_physical_pN_ns_per_nm": zeta_phys,
