@@ -467,18 +467,22 @@ class ChainKit:
         facing segments of ``chains`` (:func:`dnabraid.forces.chiral.chiral_force`;
         docs/chirality.md), rebuilt over every copy when replicas are packed. Its weight is
         flat (1) up to the contact distance: the capsule contact's D_c where
-        :meth:`add_capsule_contact` was called, else the effective diameter. Its curvature
+        :meth:`add_capsule_contact` was called (with the two-ply calibration N(eta) of this
+        bead spacing), else the effective diameter (uncalibrated, as the numpy twin the
+        catenane scene reports). Its curvature
         per unit alpha is at most ~0.1 A / lambda_D^2 per nm of partner (A ~ 1/(2 Delta)),
         summed over ~2 Delta of partner and both ends: that bounds its rate."""
         from .forces.chiral import chiral_force
 
         d = self.dna
-        contact = float(getattr(self, "capsule_contact_nm", None) or d.diameter_nm)
+        capsules = getattr(self, "capsule_contact_nm", None) is not None
+        contact = float(self.capsule_contact_nm) if capsules else d.diameter_nm
 
-        def make(chs, d=d, alpha=float(alpha_pN), closed=bool(closed), contact=contact):
+        def make(chs, d=d, alpha=float(alpha_pN), closed=bool(closed), contact=contact,
+                 calibrate=capsules):
             return chiral_force(chs, alpha, delta_nm=contact, debye_nm=d.debye_nm,
                                 bead_spacing_nm=d.bead_spacing_nm, closed=closed,
-                                name="chiral")
+                                name="chiral", calibrate_two_ply=calibrate)
 
         return self.add_rebuildable_force(
             make, chains, "chiral",

@@ -13,28 +13,42 @@ t2 = cos(eta) t1 - sin(eta) u1, u1 = t1 x d1), so that
     eta = atan2((t1 x t2) . d1, t1 . t2).
 
 The bead model replaces the contact integral  E = int phi ds  (slide 5, E = int_0^L phi ds)
-by a double sum over pairs of segments (and over ``q`` sample points per segment), see
-:func:`pair_terms`:
+by a sum over sample points of each segment against the lines of the partner's segments,
+see :func:`pair_terms`:
 
-    E = alpha sum_{a<b} sum_{k,m} (l_a/q)(l_b/q) K(|p_b^m - p_a^k|) G(eta_ab^{km})      (C1)
+    E = alpha sum_{a<b} (1/2) [ sum_k (l_a/q) psi(t_{k|b}) w(r_{k|b}) G(c, s_{k|b}) + (a <-> b) ]   (C1)
 
-* K(r) = A f(r) c(r) is a distance weight with f(r) = 1/(1 + exp((r - Delta)/rho)) (a Fermi
-  step: flat below the contact distance Delta, decaying like exp(-r/rho) beyond it) and c(r)
-  a C2 switch to zero between r_s = Delta + 4 rho and r_c = Delta + 6 rho. A normalises the
-  weight along a straight partner at distance Delta:  int K(sqrt(Delta^2 + v^2)) dv = 1  (C2).
+with q sample points p_k = x_a0 + (k + 1/2)/q e_a on segment a, t_{k|b} the parameter of the
+foot of p_k on the (infinite) line of segment b (0 and 1 at its ends), r_{k|b} the distance
+from p_k to that line and d the unit vector from p_k to the foot (perpendicular to t_b).
+
+* psi(t) = sigma(t + 1/2) - sigma(t - 1/2) (sigma the C2 step 0 -> 1 on [0, 1]) is the share
+  of segment b in the partner seen from p_k: shares of consecutive collinear segments add up to
+  exactly 1, so a point facing a straight partner counts once whatever the beads' register.
+* w(r) (C2) is the distance weight, a function of the point's distance to the partner (the
+  closest distance between the point and the partner's segment line): w = 1 for r <= D_c, the
+  contact distance (the capsule contact's D_c in the scenes, docs/chirality.md), and
+  w = (1 + x/rho) exp(-x/rho), x = r - D_c, beyond it (C1 at D_c: no slope at contact), times
+  a C2 switch to zero between r_s = D_c + 4 rho and r_c = D_c + 6 rho. It is normalised by
+  construction: a strand facing its partner at D_c carries g per unit length (A = 1).
 * The decay length rho is that of the first helical harmonic of the DNA charge pattern
   (:func:`chiral_range_nm`, Eq. C6), rho = 1/kappa_1 = 1/sqrt(lambda_D^-2 + g^2),
   g = 2 pi / H, H = 3.4 nm: 0.53 nm at 10 mM, 0.45 nm at 150 mM, 0.27 nm at 1 M (it was the
   Debye length lambda_D, 3.04-0.30 nm, before the range of the first helical harmonic ; docs/chiral_range.md).
-* G(c, s) = (c^2 + s^2) tan(eta'/2) sqrt(cos eta') S(eta') / N(eta') (C3), with c = t_a . t_b,
-  s = (t_a x t_b) . d, eta' = atan(s/c) = eta folded into (-pi/2, pi/2) (apolar DNA) and S a
-  C2 switch from 1 at |eta'| <= eta_on (60 deg by default) to 0 at |eta'| = pi/2. The factor
-  sqrt(cos eta') undoes the geometric fact that the distance between two helices of a two-ply
-  grows as r^2 = Delta^2 + u^2 cos(eta) with the offset u along the partner, so
-  int K du = 1/sqrt(cos eta) (C4). The facing factor c^2 + s^2 (1 at contact points) makes G
-  vanish where eta is undefined (c = s = 0). N(eta), a quadratic in eta^2 near 0.95, is fitted
-  at construction so that an ideal uniform two-ply carries alpha tan(eta/2) per unit strand
-  length for |eta| <= eta_on (C5; within 0.2 % continuous, 1 % for 0.5 nm beads).
+* G(c, s) = c s rho_f / (rho_f + |c|), rho_f = sqrt(c^2 + s^2) (C3), with c = t_a . t_b and
+  s = (t_a x t_b) . d: with eta' = atan(s/c) (eta folded into [-pi/2, pi/2], apolar DNA),
+  G = rho_f^2 cos(eta') tan(eta'/2). It vanishes at |eta'| = pi/2 with the same slope from
+  both sides (C1 through the fold, no switch) and where eta is undefined (c = s = 0).
+* The factor cos(eta') is a Jacobian (C4): the feet of the points of one helix of a two-ply on
+  the lines of the other's segments advance by cos(eta) per unit length (the partner curves
+  towards the point: 1 - kappa D = 1 - 2 sin^2(eta/2)), so the shares sum to 1/cos(eta) on
+  average, and an ideal two-ply carries alpha tan(eta/2) per unit strand length for every
+  |eta| < pi/2 (0.3 % for 0.5 nm beads; 2 % low at eta = 26 deg for the 5 nm beads of the
+  braid scene, 8 % at 45 deg). A straight crossing at angle eta gets cos(eta) tan(eta/2) per
+  unit length of overlap instead.
+* Optionally (``bead_spacing_nm`` given to :class:`ChiralKernel`; the capsule scenes) G is
+  divided by N(eta'), an even cubic in eta'^2 fitted so that the ideal two-ply of that bead
+  spacing carries tan(eta/2) per unit length (C5; within 1 % for 10-60 deg).
 
 Why rho = 1/kappa_1 (C6)
 ------------------------
@@ -63,8 +77,9 @@ absorbs what is left at contact) and the tilt's small change of the effective g 
 |eta| <= 60 deg. H = 3.4 nm is the B-DNA helical repeat (10-10.5 bp x 0.33-0.34 nm), the value
 the Kornyshev papers use. The equation numbers of these papers were not checked here (not at
 hand); the statement (C6) is their standard result. alpha stays defined at the reference
-distance Delta (C2, C5); the bead model's strands sit farther apart (WCA contact ~2^(1/6)
-Delta), where the shorter range leaves less of alpha: docs/chiral_range.md.
+distance D_c (C2, C5); with the capsule contact the strands touch there; with the bead WCA
+contact they sit farther apart (~2^(1/6) Delta), where the weight leaves less of alpha:
+docs/chiral_range.md.
 
 Everything here is brute force over all segment pairs: it is the oracle for the pair search
 and the OpenMM force in :mod:`dnabraid.forces.chiral`, which share :func:`pair_terms`.
@@ -72,6 +87,7 @@ and the OpenMM force in :mod:`dnabraid.forces.chiral`, which share :func:`pair_t
 
 from __future__ import annotations
 
+import functools
 import math
 
 import numpy as np
@@ -83,7 +99,8 @@ SWITCH_RANGES = 4.0
 #: Helical pitch H of B-DNA (nm): the wavenumber of the charge pattern is g = 2 pi / H
 #: (forcefields/chiral.toml [helix] pitch_nm; tested equal).
 HELIX_PITCH_NM = 3.4
-#: Folded braid angle at which the angular switch starts (rad).
+#: Former start of the angular switch (rad); kept for callers, unused since the apolar factor
+#: cos(eta') tan(eta'/2) (Eq. C3) vanishes at 90 deg by itself.
 ETA_ON = math.pi / 3.0
 
 
@@ -141,7 +158,7 @@ class ChiralKernel:
 
     def __init__(self, delta_nm, debye_nm, *, range_nm=None, pitch_nm=HELIX_PITCH_NM,
                  cutoff_ranges=CUTOFF_RANGES, switch_ranges=SWITCH_RANGES, eta_on_rad=ETA_ON,
-                 calibrate=True):
+                 calibrate=True, bead_spacing_nm=None, subdivisions=None):
         self.delta = float(delta_nm)
         self.debye = float(debye_nm)
         if not (self.delta > 0 and self.debye > 0):
@@ -158,6 +175,13 @@ class ChiralKernel:
         self.r_s = self.delta + switch_ranges * self.range
         self.eta_on = float(eta_on_rad)
         self.amplitude = 1.0
+        self.ncoef = np.array([1.0])
+        if calibrate and bead_spacing_nm is not None:
+            q = (default_subdivisions(bead_spacing_nm, self.delta, self.debye,
+                                      range_nm=self.range)
+                 if subdivisions is None else int(subdivisions))
+            self.ncoef = np.array(_two_ply_ncoef(self.delta, self.range, self.r_s, self.r_c,
+                                                 float(bead_spacing_nm), q))
 
     def __setstate__(self, st):
         # A kernel pickled before the range of the first helical harmonic has no ``range``:
@@ -179,13 +203,15 @@ class ChiralKernel:
         return f * c, df * c + f * dc
 
     def angular(self, c, s):
-        """G(c, s) = c s rho / (rho + |c|), rho = sqrt(c^2 + s^2), and dG/dc, dG/ds (Eq. C3).
+        """G(c, s) = c s rho / ((rho + |c|) N(eta')), rho = sqrt(c^2 + s^2), and dG/dc, dG/ds
+        (Eq. C3).
 
         ``c = t1 . t2`` and ``s = (t1 x t2) . d``. With eta' = atan(s / c), eta folded into
-        [-pi/2, pi/2] (apolar DNA), G = rho^2 cos(eta') tan(eta'/2): the apolar fold's
-        c s (unchanged by t -> -t of either strand) times 1 / (1 + cos eta'). G vanishes at
-        |eta'| = pi/2 with the same slope from both sides (C1 across the fold) and where eta
-        is undefined (c = s = 0). The factor cos(eta') is the Jacobian of a two-ply (Eq. C4).
+        [-pi/2, pi/2] (apolar DNA), G = rho^2 cos(eta') tan(eta'/2) / N(eta'): the apolar
+        fold's c s (unchanged by t -> -t of either strand) times 1 / (1 + cos eta'). G vanishes
+        at |eta'| = pi/2 with the same slope from both sides (C1 across the fold; N is even)
+        and where eta is undefined (c = s = 0). The factor cos(eta') is the Jacobian of a
+        two-ply (Eq. C4); N(eta') = polyval(ncoef, eta'^2) the bead two-ply's (Eq. C5).
         """
         c = np.asarray(c, float)
         s = np.asarray(s, float)
@@ -196,6 +222,16 @@ class ChiralKernel:
         G = c * s * rr / A
         dGc = s * rr / A + c * s * (c / rr) / A - G * (c / rr + np.sign(c)) / A
         dGs = c * rr / A + c * s * (s / rr) / A - G * (s / rr) / A
+        if len(self.ncoef) > 1 or self.ncoef[0] != 1.0:
+            sg = np.where(c < 0.0, -1.0, 1.0)
+            eta = np.arctan2(sg * s, np.abs(c))  # folded, [-pi/2, pi/2]
+            e2 = eta * eta
+            n = np.polyval(self.ncoef, e2)
+            dn = np.polyval(np.polyder(self.ncoef), e2) * 2.0 * eta
+            r2 = rr * rr
+            dGc = (dGc - G * dn * (-s / r2) / n) / n
+            dGs = (dGs - G * dn * (c / r2) / n) / n
+            G = G / n
         return (np.where(ok, G, 0.0), np.where(ok, dGc, 0.0), np.where(ok, dGs, 0.0))
 
     def target(self, eta):
@@ -213,6 +249,57 @@ def _share(t):
     s1, d1 = _smootherstep(t + 0.5)
     s2, d2 = _smootherstep(t - 0.5)
     return s2 - s1, d2 - d1
+
+
+def bead_two_ply(eta, delta_nm, bead_spacing_nm, n_beads, shift=0.0):
+    """Ideal two-ply of two polylines with beads every ``bead_spacing_nm`` of arc on helices
+    of radius delta/2 (braid angle ``eta``; right-handed for eta < 0), strand 2's beads shifted
+    by ``shift`` spacings along its arc. Returns (positions, chains)."""
+    R = 0.5 * float(delta_nm)
+    th = 0.5 * abs(float(eta))
+    hand = 1.0 if eta <= 0 else -1.0
+    pitch = R / math.tan(th)
+    ds = math.hypot(R, pitch)
+    b = float(bead_spacing_nm)
+    out = []
+    for off, sh in ((0.0, 0.0), (math.pi, shift * b)):
+        ph = (np.arange(n_beads) * b + sh) / ds
+        out.append(np.stack([R * np.cos(hand * ph + off), R * np.sin(hand * ph + off),
+                             pitch * ph], 1))
+    return np.vstack(out), [np.arange(n_beads), n_beads + np.arange(n_beads)]
+
+
+#: Braid angles (deg) of the calibration of N(eta) (Eq. C5).
+CALIBRATION_DEG = (5.0, 15.0, 25.0, 35.0, 45.0, 55.0, 65.0, 75.0, 85.0)
+
+
+@functools.lru_cache(maxsize=64)
+def _two_ply_ncoef(delta, rho, r_s, r_c, b, q, iterations=3):
+    """Coefficients of N(eta) (a cubic in eta^2) such that the ideal bead two-ply
+    (:func:`bead_two_ply`, spacing b, q samples) carries tan(eta/2) per unit strand length
+    (Eq. C5): the energy per unit length of the middle (difference of a 24- and a 48-bead
+    ply, two registers) over tan(eta/2), at :data:`CALIBRATION_DEG`; fixed-point passes
+    N <- N x ratio, since off-contact sample points see other angles than the ply's."""
+    k = ChiralKernel.__new__(ChiralKernel)
+    k.delta, k.range, k.r_s, k.r_c = delta, rho, r_s, r_c
+    k.ncoef = np.array([1.0])
+    etas = np.radians(CALIBRATION_DEG)
+    geometry = []
+    for eta in etas:
+        for shift in (0.0, 0.5):
+            for nb in (24, 48):
+                pos, ch = bead_two_ply(-eta, delta, b, nb, shift)
+                seg, cid, _, _, _ = segments_of(ch)
+                a, bb = np.triu_indices(len(seg), 1)
+                keep = cid[a] != cid[bb]
+                geometry.append((pos, seg, a[keep], bb[keep]))
+    for _ in range(iterations):
+        e = np.array([pair_terms(pos, seg, a, bb, k, q)[0] for pos, seg, a, bb in geometry])
+        e = e.reshape(len(etas), 2, 2)
+        per_length = (e[:, :, 1] - e[:, :, 0]).mean(axis=1) / (24 * b)
+        ratio = per_length / np.tan(-0.5 * etas)
+        k.ncoef = np.polyfit(etas**2, np.polyval(k.ncoef, etas**2) * ratio, 3)
+    return tuple(k.ncoef)
 
 
 def segments_of(chains, closed=False):
@@ -379,7 +466,7 @@ def default_subdivisions(bead_spacing_nm, delta_nm, debye_nm, *, range_nm=None):
 def chiral_energy_forces(positions_nm, chains, alpha_pN, *, delta_nm, debye_nm,
                          exclude_neighbours, subdivisions=1, closed=False, range_nm=None,
                          cutoff_ranges=CUTOFF_RANGES, switch_ranges=SWITCH_RANGES,
-                         eta_on_rad=ETA_ON):
+                         eta_on_rad=ETA_ON, calibrate_spacing_nm=None):
     """Chiral energy (pN nm) and forces (pN) by brute force over all segment pairs.
 
     Parameters
@@ -401,6 +488,9 @@ def chiral_energy_forces(positions_nm, chains, alpha_pN, *, delta_nm, debye_nm,
         Ring chains.
     range_nm, cutoff_ranges, switch_ranges, eta_on_rad
         Passed to :class:`ChiralKernel`.
+    calibrate_spacing_nm : float, optional
+        Bead spacing of the two-ply calibration N(eta) (Eq. C5; the twin of
+        ``chiral_force(..., calibrate_two_ply=True)``); None: N = 1.
 
     Returns
     -------
@@ -409,7 +499,8 @@ def chiral_energy_forces(positions_nm, chains, alpha_pN, *, delta_nm, debye_nm,
     """
     pos = np.asarray(positions_nm, float)
     kernel = ChiralKernel(delta_nm, debye_nm, range_nm=range_nm, cutoff_ranges=cutoff_ranges,
-                          switch_ranges=switch_ranges, eta_on_rad=eta_on_rad)
+                          switch_ranges=switch_ranges, eta_on_rad=eta_on_rad,
+                          bead_spacing_nm=calibrate_spacing_nm, subdivisions=subdivisions)
     seg, cid, pic, nseg, ring = segments_of(chains, closed)
     a, b = np.triu_indices(len(seg), 1)
     keep = pair_allowed(a, b, cid, pic, nseg, ring, int(exclude_neighbours))
