@@ -175,6 +175,49 @@ class TrapTorque(Observable):
         return {"torque_pN_nm": -self.K * math.sin(lag)}
 
 
+class StrandTorque(Observable):
+    """Torque about the vertical that everything but the trap exerts on the top (the bead
+    centre and the attachments), -dU_rest/d theta, times -1: dU_rest/d theta for a rigid
+    turn theta of the top about the vertical through the bead centre (pN nm), by a central
+    difference of the compiled local energies (:class:`dnabraid.kernels.LocalEnergy`,
+    every term but ``trap``; step 1e-4 rad, error O(1e-8) relative).
+
+    A turn of a subset of particles is volume preserving, so <dU/d theta> = 0 for the total
+    energy in equilibrium (integration by parts): the mean of this column equals the mean
+    of ``torque_pN_nm`` (the trap's), from forces the trap's libration does not set. Their
+    difference has mean zero exactly, a control variate (workflows/torque_estimators.py).
+    """
+
+    STEP_RAD = 1e-4
+
+    def __init__(self, model, top):
+        from .kernels import LocalEnergy
+
+        self.le = LocalEnergy(model)
+        self.top = np.asarray(top, np.int64)
+        self.center = int(model.bead_center)
+        self.columns = {"torque_strands_pN_nm": Column(
+            "pN nm", "dU/d theta of all terms but the trap for a turn of the top about the "
+                     "vertical (equal in mean to the trap torque)", digits=1)}
+
+    def _turned(self, pos, th):
+        c = pos[self.center]
+        d = pos[self.top] - c
+        co, si = math.cos(th), math.sin(th)
+        out = d.copy()
+        out[:, 0] = co * d[:, 0] - si * d[:, 1]
+        out[:, 1] = si * d[:, 0] + co * d[:, 1]
+        return out + c
+
+    def __call__(self, pos, ctx, values):
+        pos = np.ascontiguousarray(pos, dtype=float)
+        h = self.STEP_RAD
+        up = self.le.delta_terms(pos, self.top, self._turned(pos, h))
+        dn = self.le.delta_terms(pos, self.top, self._turned(pos, -h))
+        d = sum(up[t] - dn[t] for t in up if t != "trap")
+        return {"torque_strands_pN_nm": d / (2 * h)}
+
+
 class Catenation(Observable):
     """Gauss catenation of two strands (turns); it must follow the bead angle."""
 

@@ -19,6 +19,33 @@ Kinds (rows of the statistics, in this order):
    ``twist_rad``]: the top's rotation in the trap with the strands following. Each
    particle's map is a rotation about an axis the move does not change (the centre's
    position), so Jacobian 1 and the reverse move is -theta.
+4. ``sway``: each strand turned rigidly by the same rotation R (a horizontal axis of
+   uniform direction, angle uniform in [-``sway_rad``, ``sway_rad``]) about its own
+   anchor (its first bead), the bead centre translated by the mean displacement of the two
+   attachments: the pendulum of the top with the strands' bond lengths, bends and stored
+   length kept (the four-bar linkage of two strands and a rigid top). The shear's affine
+   map stretches every bond of a strand that is not straight (a 10 nm shear of the long
+   braid costs about 17 kT of stretch), the sway only the links at the top. The map is a
+   rotation of each strand and a translation of the centre by a function of the strands
+   (block triangular, Jacobian 1); the reverse move is R^-1, as likely, so plain
+   Metropolis is exact.
+5. ``pivot``: bead k (uniform in 1 ... shorter strand - 1) of both strands: beads k ...
+   of both strands turned rigidly by theta (uniform in [-``pivot_rad``, ``pivot_rad``])
+   about the line through bead k - 1 of strand 1 and bead k - 1 of strand 2, the bead
+   centre translated by the attachments' mean displacement (as in the sway: turning the
+   centre with them would swing the 0.5-1 um bead about the attachments). Every strand
+   bond keeps its length, and each strand's end-to-end
+   distance changes at first order in theta wherever it is bent at bead k - 1: the
+   stored length, hence the extension, which crankshafts (they keep the chord of their
+   arc), the sway and the twist cannot change and which bead moves change only by
+   diffusion along the strand. The axis is made of beads the move does not move, so the
+   reverse move is -theta (Jacobian 1, as the sway's).
+6. ``tilt``: the bead centre alone turned by theta (uniform in [-``tilt_rad``,
+   ``tilt_rad``]) about the line through the two attachments: the bead's tilt about its
+   attachments, resisted only by the force on the centre (the link bonds keep their
+   lengths; std sqrt(kT / (F R)), 0.064 rad for R = 0.5 um at 2 pN), which the sway and
+   the pivot leave alone. The axis is made of particles the move does not move (reverse
+   -theta, Jacobian 1).
 
 Topology: a move may pass one strand through the other, which the Brownian dynamics
 cannot (excluded volume). Every proposal that the Metropolis test would accept is checked:
@@ -46,13 +73,14 @@ from .chain import (
     delta_kernel,
     hash_build,
     rotate_into,
+    rotation_matrix,
     wca_all,
 )
 
 __all__ = ["BRAID_KINDS", "catenation", "run_braid_moves"]
 
 #: Move kinds, in the order of :func:`run_braid_moves`' statistics rows.
-BRAID_KINDS = ("crankshaft", "bead", "shear", "twist")
+BRAID_KINDS = ("crankshaft", "bead", "shear", "twist", "sway", "pivot", "tilt")
 
 
 # ------------------------------------------------------------------------------- catenation
@@ -191,8 +219,8 @@ def _near(pos, beads, ray, cx, cy, cz, r2):
 # ------------------------------------------------------------------------------- the loop
 @numba.njit(cache=True)
 def run_braid_moves(pos, P, c_ptr, c_beads, c_fixed, mobile, wgt, center, cum, crank_max,
-                    crank_angle, bead_nm, shear_nm, shear_z_nm, twist_rad, kT, uni, gau,
-                    stats, terms):
+                    crank_angle, bead_nm, shear_nm, shear_z_nm, twist_rad, sway_rad, pivot_rad,
+                    tilt_rad, kT, uni, gau, stats, terms):
     """Metropolis crankshaft, bead, shear and twist moves of a braid on ``pos`` (modified
     in place; module docstring).
 
@@ -208,11 +236,11 @@ def run_braid_moves(pos, P, c_ptr, c_beads, c_fixed, mobile, wgt, center, cum, c
         Weights of shear and twist (0: not moved by them).
     center : int
         The bead centre (axis of the twist).
-    cum : float64 (4,)
-        Cumulative probabilities of the kinds.
+    cum : float64 (7,)
+        Cumulative probabilities of the kinds (:data:`BRAID_KINDS`).
     kT : float
     uni : float64 (n, 6), gau : float64 (n, 3)
-    stats : int64 (4, 3)
+    stats : int64 (7, 3)
         Added to: attempted, refused (topology or degenerate), accepted per kind.
     terms : float64 (NTERMS,)
         Added to: the accepted energy change per term (pN nm).
@@ -245,8 +273,8 @@ def run_braid_moves(pos, P, c_ptr, c_beads, c_fixed, mobile, wgt, center, cum, c
     absum = 0.0
     for t in range(uni.shape[0]):
         r = uni[t, 0]
-        kind = 3
-        for q in range(3):
+        kind = cum.shape[0] - 1
+        for q in range(cum.shape[0] - 1):
             if r < cum[q]:
                 kind = q
                 break
@@ -338,6 +366,84 @@ def run_braid_moves(pos, P, c_ptr, c_beads, c_fixed, mobile, wgt, center, cum, c
                         idx[m] = p
                         m += 1
                         moved[p] = m
+            elif kind == 4:
+                th = sway_rad * (2.0 * uni[t, 2] - 1.0)
+                ang = 2.0 * math.pi * uni[t, 3]
+                R = rotation_matrix(math.cos(ang), math.sin(ang), 0.0, th)
+                sx = 0.0
+                sy = 0.0
+                sz = 0.0
+                for c in range(2):
+                    a = c_beads[c_ptr[c]]
+                    for k in range(1, c_ptr[c + 1] - c_ptr[c]):
+                        p = c_beads[c_ptr[c] + k]
+                        g = c_ptr[c] + k
+                        if c_fixed[g + 1] - c_fixed[g] > 0:
+                            continue
+                        rotate_into(pos, R, pos[a, 0], pos[a, 1], pos[a, 2], p, new, m)
+                        idx[m] = p
+                        m += 1
+                        moved[p] = m
+                    q = m - 1
+                    sx += 0.5 * (new[q, 0] - pos[idx[q], 0])
+                    sy += 0.5 * (new[q, 1] - pos[idx[q], 1])
+                    sz += 0.5 * (new[q, 2] - pos[idx[q], 2])
+                if moved[center] == 0:
+                    new[m, 0] = pos[center, 0] + sx
+                    new[m, 1] = pos[center, 1] + sy
+                    new[m, 2] = pos[center, 2] + sz
+                    idx[m] = center
+                    m += 1
+                    moved[center] = m
+            elif kind == 5:
+                k = 1 + int(uni[t, 3] * (min(n1, n2) - 1))
+                pa = b1[k - 1]
+                pb = b2[k - 1]
+                ax = pos[pb, 0] - pos[pa, 0]
+                ay = pos[pb, 1] - pos[pa, 1]
+                az = pos[pb, 2] - pos[pa, 2]
+                nrm = math.sqrt(ax * ax + ay * ay + az * az)
+                if nrm < 1e-9:
+                    stats[kind, 1] += 1
+                    continue
+                R = rotation_matrix(ax / nrm, ay / nrm, az / nrm,
+                                    pivot_rad * (2.0 * uni[t, 2] - 1.0))
+                for c in range(2):
+                    for kk in range(k, c_ptr[c + 1] - c_ptr[c]):
+                        g = c_ptr[c] + kk
+                        if c_fixed[g + 1] - c_fixed[g] > 0:
+                            continue
+                        p = c_beads[g]
+                        rotate_into(pos, R, pos[pa, 0], pos[pa, 1], pos[pa, 2], p, new, m)
+                        idx[m] = p
+                        m += 1
+                        moved[p] = m
+                if moved[center] == 0:
+                    # the centre follows the attachments' mean displacement
+                    q1 = moved[b1[n1 - 1]] - 1
+                    q2 = moved[b2[n2 - 1]] - 1
+                    for d in range(3):
+                        new[m, d] = pos[center, d] + 0.5 * (new[q1, d] - pos[b1[n1 - 1], d]
+                                                            + new[q2, d] - pos[b2[n2 - 1], d])
+                    idx[m] = center
+                    m += 1
+                    moved[center] = m
+            elif kind == 6:
+                pa = b1[n1 - 1]
+                pb = b2[n2 - 1]
+                ax = pos[pb, 0] - pos[pa, 0]
+                ay = pos[pb, 1] - pos[pa, 1]
+                az = pos[pb, 2] - pos[pa, 2]
+                nrm = math.sqrt(ax * ax + ay * ay + az * az)
+                if nrm < 1e-9:
+                    stats[kind, 1] += 1
+                    continue
+                R = rotation_matrix(ax / nrm, ay / nrm, az / nrm,
+                                    tilt_rad * (2.0 * uni[t, 2] - 1.0))
+                rotate_into(pos, R, pos[pa, 0], pos[pa, 1], pos[pa, 2], center, new, 0)
+                idx[0] = center
+                m = 1
+                moved[center] = 1
             else:
                 th = twist_rad * (2.0 * uni[t, 2] - 1.0)
                 cx = pos[center, 0]
@@ -362,7 +468,9 @@ def run_braid_moves(pos, P, c_ptr, c_beads, c_fixed, mobile, wgt, center, cum, c
         if ok:
             # topology: the catenation may not jump
             newcat = cat
-            if kind >= 2:
+            if kind == 6:
+                newcat = cat
+            elif kind >= 2:
                 newcat = _cat_part(pos, new, moved, True, b1, b2, 0, n1, 0, n2, ray)
             elif ch >= 0:
                 other = b2 if ch == 0 else b1

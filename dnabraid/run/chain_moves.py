@@ -298,7 +298,13 @@ class BraidMoves(ChainMoves):
     each strand, single-particle moves, the ``shear`` of the top (bead centre and
     attachments translated by d, strand bead k by d k / (beads - 1): the pendulum mode)
     and the ``twist`` (the same weights, turned about the vertical axis through the bead
-    centre: the top in the trap, the strands following). Moves that would change the
+    centre: the top in the trap, the strands following) and the ``sway`` (each strand turned
+    rigidly about its anchor by one rotation about a horizontal axis, the bead centre
+    translated with the attachments: the pendulum with the strands' shapes kept) and the
+    ``pivot`` (both strands above bead k and the bead centre turned rigidly about the line
+    through the two strands' beads k - 1, the centre following the attachments: the
+    extension) and the ``tilt`` (the bead centre turned about the line through the
+    attachments). Moves that would change the
     strands' catenation by more than 0.5 turn (a strand passing the other) are refused.
     The interface and the guard are :class:`ChainMoves`'.
 
@@ -312,11 +318,11 @@ class BraidMoves(ChainMoves):
         The bead centre (moved by bead, shear and twist moves).
     kT_pN_nm : float
     moves_per_call : int
-    crank_angle_rad, bead_move_nm, shear_nm, shear_z_nm, twist_rad : float
+    crank_angle_rad, bead_move_nm, shear_nm, shear_z_nm, twist_rad, sway_rad, pivot_rad, tilt_rad : float
         Amplitudes (0 leaves a kind out; ``shear_z_nm`` 0 keeps the shear horizontal).
     crank_max_beads : int
-    weights : 4 floats
-        Relative probabilities of crankshaft, bead, shear, twist.
+    weights : 7 floats
+        Relative probabilities of crankshaft, bead, shear, twist, sway, pivot, tilt.
     seed, guard_every, guard_rel, guard_abs_pN_nm
         As :class:`ChainMoves`'.
     """
@@ -324,17 +330,20 @@ class BraidMoves(ChainMoves):
     def __init__(self, energy, chains, fixed, center: int, kT_pN_nm: float, *,
                  moves_per_call: int, crank_angle_rad: float, bead_move_nm: float,
                  shear_nm: float, shear_z_nm: float = 0.0, twist_rad: float = 0.0,
-                 crank_max_beads: int = 8, weights=(4.0, 4.0, 1.0, 1.0), seed: int = 1,
+                 sway_rad: float = 0.0, pivot_rad: float = 0.0, tilt_rad: float = 0.0,
+                 crank_max_beads: int = 8, weights=(4.0, 4.0, 0.5, 0.5, 1.0, 2.0, 1.0),
+                 seed: int = 1,
                  guard_every: int = 100, guard_rel: float = GUARD_REL,
                  guard_abs_pN_nm: float = GUARD_ABS_PN_NM):
         if moves_per_call < 1:
             raise ValueError("moves_per_call must be >= 1")
         amps = (float(crank_angle_rad), float(bead_move_nm), float(shear_nm),
-                float(twist_rad))
+                float(twist_rad), float(sway_rad), float(pivot_rad), float(tilt_rad))
         if min(amps) < 0 or shear_z_nm < 0 or not any(a > 0 for a in amps):
             raise ValueError("move amplitudes must be >= 0, not all 0")
-        if amps[0] > math.pi or amps[3] > math.pi:
-            raise ValueError("crank_angle_rad and twist_rad must be <= pi")
+        if amps[0] > math.pi or max(amps[3:]) > math.pi:
+            raise ValueError("crank_angle_rad, twist_rad, sway_rad, pivot_rad and tilt_rad "
+                             "must be <= pi")
         if crank_max_beads < 1:
             raise ValueError("crank_max_beads must be >= 1")
         chains = [np.asarray(c, np.int64) for c in chains]
@@ -344,7 +353,8 @@ class BraidMoves(ChainMoves):
         self._energy = energy
         self.kT = float(kT_pN_nm)
         self.moves_per_call = int(moves_per_call)
-        self.crank_angle, self.bead_nm, self.shear_nm, self.twist_rad = amps
+        (self.crank_angle, self.bead_nm, self.shear_nm, self.twist_rad, self.sway_rad,
+         self.pivot_rad, self.tilt_rad) = amps
         self.shear_z_nm = float(shear_z_nm)
         self.crank_max = int(crank_max_beads)
         self.weights = w / w.sum()
@@ -374,7 +384,7 @@ class BraidMoves(ChainMoves):
         self._wgt = wgt
         self.kinds = [k for k, x in zip(BRAID_KINDS, self.weights) if x > 0]
         self.stats = {k: MoveStats() for k in self.kinds}
-        self._stats = np.zeros((4, 3), np.int64)
+        self._stats = np.zeros((len(BRAID_KINDS), 3), np.int64)
         self.rng = np.random.default_rng([self.seed, 0])
         self._calls = 0
         self.guard_checks = 0
@@ -401,7 +411,9 @@ class BraidMoves(ChainMoves):
                                      self._c_fixed, self._mobile, self._wgt, self.center,
                                      self._cum, self.crank_max, self.crank_angle,
                                      self.bead_nm, self.shear_nm, self.shear_z_nm,
-                                     self.twist_rad, self.kT, uni, gau, self._stats, terms)
+                                     self.twist_rad, self.sway_rad, self.pivot_rad,
+                                     self.tilt_rad, self.kT, uni, gau,
+                                     self._stats, terms)
         self.catenation = float(cat)
         self._tally(before, BRAID_KINDS)
         return terms, float(absum)
@@ -410,7 +422,9 @@ class BraidMoves(ChainMoves):
         """Amplitudes, the guard's record and the counts of each kind."""
         return {"crank_angle_rad": self.crank_angle, "bead_move_nm": self.bead_nm,
                 "shear_nm": self.shear_nm, "shear_z_nm": self.shear_z_nm,
-                "twist_rad": self.twist_rad, "crank_max_beads": self.crank_max,
+                "twist_rad": self.twist_rad, "sway_rad": self.sway_rad,
+                "pivot_rad": self.pivot_rad, "tilt_rad": self.tilt_rad,
+                "crank_max_beads": self.crank_max,
                 "moves_per_call": self.moves_per_call, "guard_checks": self.guard_checks,
                 "guard_max_diff_pN_nm": self.guard_max_diff,
                 **{k: v.to_dict() for k, v in self.stats.items()}}

@@ -316,6 +316,18 @@ class Engine:
         """The Context's global parameters now (name -> value, OpenMM units)."""
         return {k: float(v) for k, v in self.context.getParameters().items()}
 
+    def forget_noise(self) -> None:
+        """Draw the Leimkuhler-Matthews noise memory (``xi_old``) afresh at the next step.
+
+        LM uses each Gaussian draw in two consecutive steps; after a Metropolis move has
+        turned or displaced particles, the remembered draw belongs to positions they no
+        longer have (a rotated arc keeps its unrotated noise). A fresh, independent draw
+        makes the next step an Euler-Maruyama step from the moved state (one step per
+        report interval), after which LM proceeds. No effect for Euler-Maruyama.
+        """
+        if self.integrator_name == "lm":
+            self.integrator.setGlobalVariableByName("started", 0.0)
+
     def set_parameter(self, name: str, value: float) -> None:
         self.context.setParameter(name, float(value))
 

@@ -248,8 +248,10 @@ def apply_moves(engine, members) -> None:
     """One call of every member's ``model.moves`` on a (packed) engine.
 
     Each member is moved in its own frame (``member.sl``, ``member.offset``); copies in one
-    Context do not interact, so the total energy's change is the moved copy's.
+    Context do not interact, so the total energy's change is the moved copy's. The
+    Leimkuhler-Matthews noise memory is then drawn afresh (:meth:`Engine.forget_noise`).
     """
+    moved = False
     for m in members:
         mv = m.model.moves
         if mv is None:
@@ -265,3 +267,6 @@ def apply_moves(engine, members) -> None:
             engine.set_positions(full)
 
         mv.attempt(get_pos, set_pos, engine.energy_pN_nm, parameters=engine.parameters())
+        moved = True
+    if moved:  # the integrator's noise memory belongs to the positions before the moves
+        engine.forget_noise()

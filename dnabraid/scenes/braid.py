@@ -96,6 +96,16 @@ class Braid(TurnedScene):
     shear_z_nm: float = key(1.0, "nm", "largest vertical shift of a shear move")
     twist_rad: float = key(0.05, "rad", "largest turn of the top about the vertical through "
                            "the bead centre in a twist move (strand bead k: k/(beads-1) of it)")
+    sway_rad: float = key(0.1, "rad", "largest angle of a sway move: each strand turned "
+                          "rigidly about its anchor by one rotation about a horizontal axis, "
+                          "the bead centre following the attachments (the pendulum mode "
+                          "with the strands' shapes kept)")
+    pivot_rad: float = key(0.15, "rad", "largest angle of a pivot move: both strands above "
+                           "bead k and the bead centre turned about the line through the "
+                           "strands' beads k - 1 (the extension's move)")
+    tilt_rad: float = key(0.1, "rad", "largest angle of a tilt move: the bead centre turned "
+                          "about the line through the attachments")
+    crank_max_beads: int = key(8, "beads", "most beads of a crankshaft arc")
     mirror: str = key("off", "", "mirror-coupled pairs (variance reduction for handedness "
                       "asymmetries): 'off'; 'original' or 'image' run the two members of a "
                       "pair with one seed and negated turn lists: the image starts from and is "
@@ -126,12 +136,17 @@ class Braid(TurnedScene):
         need(self.mc_moves >= 0, "mc_moves", "must be >= 0 (0 = Brownian dynamics alone)")
         need(0 <= self.crank_angle_rad <= math.pi, "crank_angle_rad", "must be in [0, pi]")
         need(0 <= self.twist_rad <= math.pi, "twist_rad", "must be in [0, pi]")
+        need(0 <= self.sway_rad <= math.pi, "sway_rad", "must be in [0, pi]")
+        need(0 <= self.pivot_rad <= math.pi, "pivot_rad", "must be in [0, pi]")
+        need(0 <= self.tilt_rad <= math.pi, "tilt_rad", "must be in [0, pi]")
+        need(self.crank_max_beads >= 1, "crank_max_beads", "must be >= 1")
         for k in ("bead_move_nm", "shear_nm", "shear_z_nm"):
             need(getattr(self, k) >= 0, k, "must be >= 0")
         if self.mc_moves > 0:
             need(max(self.crank_angle_rad, self.bead_move_nm, self.shear_nm,
-                     self.twist_rad) > 0, "mc_moves",
-                 "needs a move: crank_angle_rad, bead_move_nm, shear_nm or twist_rad > 0")
+                     self.twist_rad, self.sway_rad, self.pivot_rad, self.tilt_rad) > 0,
+                 "mc_moves", "needs a move: crank_angle_rad, bead_move_nm, shear_nm, "
+                 "twist_rad, sway_rad, pivot_rad or tilt_rad > 0")
             need(self.alpha == 0.0, "mc_moves",
                  "the moves' local energies have no chiral term; set alpha=0 or mc_moves=0")
             need(self.stretch == "bonds", "mc_moves",
@@ -193,7 +208,9 @@ class Braid(TurnedScene):
                                    crank_angle_rad=self.crank_angle_rad,
                                    bead_move_nm=self.bead_move_nm, shear_nm=self.shear_nm,
                                    shear_z_nm=self.shear_z_nm, twist_rad=self.twist_rad,
-                                   seed=self.seed)
+                                   sway_rad=self.sway_rad, pivot_rad=self.pivot_rad,
+                                   tilt_rad=self.tilt_rad,
+                                   crank_max_beads=self.crank_max_beads, seed=self.seed)
         return {"bead_center": center, "zeta_center_pN_ns_per_nm": zeta_center,
                 "zeta_attach_pN_ns_per_nm": d.zeta_bead,
                 "zeta_bead_physical_pN_ns_per_nm": zeta_phys,
@@ -329,7 +346,17 @@ class Braid(TurnedScene):
         att = model.attachments
         return [ob.Extension(att),
                 ob.BeadAngle((att[0], att[1]), self.trap_stiffness_pN_nm, self.turn_rate),
-                ob.TrapTorque(self.trap_stiffness_pN_nm), ob.Catenation(model.chains)]
+                ob.TrapTorque(self.trap_stiffness_pN_nm), ob.Catenation(model.chains)] \
+            + self.strand_torque(model)
+
+    def strand_torque(self, model) -> list:
+        """The strands' torque on the top (:class:`dnabraid.observables.StrandTorque`, the
+        trap torque's control variate) where the compiled local energies hold every term
+        (no chiral term, bead contact)."""
+        if self.alpha != 0.0 or getattr(self, "contact", "beads") != "beads":
+            return []
+        att = model.attachments
+        return [ob.StrandTorque(model, [model.bead_center, att[0], att[1]])]
 
     def notes(self, model) -> list[str]:
         p = model.params
