@@ -114,14 +114,18 @@ def compare_tweezer(turns: float, alpha_pN: float, overrides: dict | None = None
                     contact_nm: float | None = None) -> dict:
     """Bead model at T = 0 against the continuum tweezer braid at +n and -n.
 
-    Returns a dict with, for each sign, bead and continuum extension and torque, and the
-    handedness asymmetries ``delta_z_nm = z(+n) - z(-n)`` and ``torque_sum_pN_nm =
-    Gamma(+n) + Gamma(-n)`` of both (zero for both when alpha = 0).
+    ``contact_nm`` (the continuum's Delta) defaults to the bead model's contact at alpha = 0,
+    or to D_c with ``contact = "capsules"``. Returns a dict with, for each sign, bead and
+    continuum extension and torque, and the handedness asymmetries
+    ``delta_z_nm = z(+n) - z(-n)`` and ``torque_sum_pN_nm = Gamma(+n) + Gamma(-n)`` of both
+    (zero for both when alpha = 0).
     """
     from ..continuum.tweezer import solve_tweezer
 
     over = {**CROSSCHECK_BRAID, **(overrides or {})}
     s = make_scene("braid", {**over, "turns": [abs(turns)]})
+    if contact_nm is None and s.contact == "capsules":
+        contact_nm = s.effective_diameter_nm  # D_c: the one contact distance
     if contact_nm is None:
         contact_nm = zero_temperature_braid(abs(turns), {**over, "alpha": 0.0}).contact_nm
     out = {"turns": abs(turns), "alpha_pN": alpha_pN, "contact_nm": contact_nm}
