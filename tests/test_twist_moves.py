@@ -185,3 +185,22 @@ def test_plectoneme_scene_wires_the_moves():
         make_scene("plectoneme", {"frame_angle_rad": 4.0})
     with pytest.raises(SceneError, match="sweep_nm"):
         make_scene("plectoneme", {"sweep_nm": 0.0})
+
+
+def test_passage_check_sees_a_bond_swept_through_another():
+    """A rod pivoted about bead 2 through a bond across its path is refused; a short turn
+    that stays clear is not (dnabraid.kernels.twist.passage_free)."""
+    from dnabraid.kernels.twist import passage_free
+
+    pos = np.array([[10.0, -3.0, 0.0], [10.0, 3.0, 0.0], [0.0, 0.0, 0.0], [0.0, 0.0, 5.0],
+                    [0.0, 0.0, 10.0]])
+    beads = np.arange(5)
+    work = [np.empty(5), np.empty(5), np.empty(5), np.empty(5, np.int64)]
+
+    def free(theta):
+        return passage_free(pos, beads, 3, 4, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, theta, 6.0,
+                            *work)
+
+    assert not free(math.pi / 2)  # bead 4 sweeps through (10, 0, 0) on the bond 0-1
+    assert not free(math.pi)  # past it
+    assert free(0.2) and free(-math.pi / 2)
