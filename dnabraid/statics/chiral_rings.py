@@ -163,7 +163,7 @@ class ChiralRings:
                             "kernel needs a half-width of at least four bead spacings "
                             f"(>= {4 * self.spacing_over_diameter:g} Delta)")
         try:
-            self.braid
+            _ = self.braid
         except ValueError as exc:
             raise UserError(str(exc)) from exc
 
@@ -453,7 +453,7 @@ def _spline_points(x, prob: Problem, seg):
     return np.stack([prob.prv[seg], seg, prob.nxt[seg], prob.nxt[prob.nxt[seg]]], axis=-1)
 
 
-def closest_on_other_ring(x, prob: Problem, cand, newton_steps: int = 8):
+def closest_on_other_ring(x, prob: Problem, cand, newton_steps: int = 5):
     """Closest point of the other ring's Catmull-Rom curve (through its beads) to each bead.
 
     The polyline's sagitta (``b^2 kappa / 8``) would make a bead-to-polyline distance
@@ -583,6 +583,7 @@ class _Lists:
                                        "no point of the other ring within 1.5 Delta")
             # the closest piece and its two neighbours (enough for small displacements)
             self.cand = np.column_stack([prob.prv[seg], seg, prob.nxt[seg]])
+            self.seg = seg
 
 
 def _soft_gradient(x, prob: Problem, lists: _Lists, wr_coef) -> np.ndarray:
@@ -623,14 +624,14 @@ def _colouring(x, prob: Problem, lists: _Lists) -> np.ndarray:
 
     i = np.arange(N)
     clique([prob.prv[prob.prv[i]], prob.prv[i], i, prob.nxt[i], prob.nxt[prob.nxt[i]]])
-    if len(lists.chiral):
+    if len(lists.chiral) and prob.model.alpha_B_per_L2 != 0.0:
         a, b = lists.chiral[:, 0], lists.chiral[:, 1]
         clique([prob.prv[a], a, prob.nxt[a], prob.prv[b], b, prob.nxt[b]])
     if lists.cand is not None:
-        for k in range(lists.cand.shape[1]):
-            s = lists.cand[:, k]
-            ok = s >= 0
-            clique([i[ok], prob.prv[s[ok]], s[ok], prob.nxt[s[ok]], prob.nxt[prob.nxt[s[ok]]]])
+        # the current closest piece's four control beads (a step of 1e-6 Delta does not
+        # move a bead's closest point onto another piece but at measure-zero places)
+        s = lists.seg
+        clique([i, prob.prv[s], s, prob.nxt[s], prob.nxt[prob.nxt[s]]])
     A = sp.csr_matrix((np.ones(sum(len(r) for r in rows)), (np.concatenate(rows),
                                                             np.concatenate(cols))),
                       shape=(N, N))
@@ -709,6 +710,7 @@ def relax(model: ChiralRings, x0, *, gtol: float | None = None, max_iter: int = 
     pinned = cb.pinned_dofs(x)
     free = np.setdiff1d(np.arange(3 * N), pinned)
     max_step = 0.25 * prob.delta
+    slide_stiffness = 100.0        # B/L^3, of the order of the rings' soft bending modes
     mu = 1e-3
     E = energy(x, prob)
     it = 0
@@ -724,7 +726,16 @@ def relax(model: ChiralRings, x0, *, gtol: float | None = None, max_iter: int = 
         if gmax < gtol:
             converged = True
             break
-        H = hessian(x, prob, lists)[np.ix_(free, free)]
+        H = hessian(x, prob, lists)
+        # each ring's bead-lattice sliding (all beads along their tangents) is a near-zero
+        # mode: stiffen it in the step (not in the energy) so that steps do not wander
+        T, _ = bead_tangents(x, prob)
+        for kk in range(2):
+            v = np.zeros((N, 3))
+            v[prob.ring(kk)] = T[prob.ring(kk)]
+            v = v.ravel() / math.sqrt(prob.ring(kk).stop - prob.ring(kk).start)
+            H += slide_stiffness * np.outer(v, v)
+        H = H[np.ix_(free, free)]
         gf = g[free]
         accepted = False
         for _ in range(30):
@@ -837,15 +848,35 @@ def measure(x, prob: Problem) -> dict:
 
 
 def solve(model: ChiralRings, x0=None, *, progress=None, stability: bool = True,
-          max_iter: int = 200) -> dict:
+          max_iter: int = 200, max_escapes: int = 3, escape_over_diameter: float = 0.5
+          ) -> dict:
     """Relax from ``x0`` (default :func:`initial_geometry`), measure, and (``stability``)
-    the lowest projected Hessian eigenvalues (B/L^3)."""
+    the lowest projected Hessian eigenvalues (B/L^3); a saddle is escaped along its negative
+    mode (largest bead displacement ``escape_over_diameter`` x Delta, both signs tried, the
+    lower energy kept), at most ``max_escapes`` times."""
     prob = make_problem(model)
     x0 = initial_geometry(model) if x0 is None else np.asarray(x0, float)
     res = relax(model, x0, progress=progress, prob=prob, max_iter=max_iter)
-    out = {**res, **measure(res["x"], prob)}
+    escapes = 0
+    w = v = None
     if stability:
         w, v = lowest_modes(res["x"], prob)
+        # a saddle (e.g. the twisted circles past Michell's threshold, an equilibrium for
+        # every Lk_i) is left along its negative mode, both ways, keeping the lower
+        while w[0] < -1e-6 * prob.braid.pressure_scale_pN_per_nm and escapes < max_escapes:
+            escapes += 1
+            mode = v[:, 0].reshape(-1, 3)
+            mode = mode * (escape_over_diameter * prob.delta / np.max(np.abs(mode)))
+            best = None
+            for sgn in (1.0, -1.0):
+                r = relax(model, res["x"] + sgn * mode, prob=prob, max_iter=max_iter,
+                          progress=progress)
+                if best is None or r["energy_B_per_L"] < best["energy_B_per_L"]:
+                    best = r
+            res = best
+            w, v = lowest_modes(res["x"], prob)
+    out = {**res, **measure(res["x"], prob), "saddle_escapes": escapes}
+    if stability:
         out["lowest_eigenvalues_B_per_L3"] = [float(t) for t in w]
         out["lowest_mode"] = v[:, 0]
     return out

@@ -1,0 +1,188 @@
+"""Tests of dnabraid.statics.chiral_rings (two linked rings with twist and the chiral term).
+
+Every reference is independent of the code under test: finite differences of the energies,
+dnabraid.geometry (Gauss writhe, linking number, ribbon twist), the closed_braid solver,
+and tan(eta/2) of the exact uniform ply. Small models (Delta/L = 0.05, b = Delta/2: 40 beads
+per ring) keep the file under ~15 s.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from dnabraid.errors import UserError
+from dnabraid.geometry.curves import gauss_linking_number, writhe
+from dnabraid.geometry.ribbon import ring_twist
+from dnabraid.statics import chiral_rings as cr
+from dnabraid.statics import closed_braid as cb
+
+SMALL = dict(diameter_over_length=0.05, spacing_over_diameter=0.5, window_over_diameter=2.0)
+
+#: central-difference gradient checks: |analytic - FD| <= FD_REL x max|gradient|
+FD_REL = 1e-6
+
+
+def _trefoilish(M=48, seed=3):
+    u = np.linspace(0, 2 * math.pi, M, endpoint=False)
+    x = np.column_stack([np.cos(u) + 0.4 * np.cos(2 * u), np.sin(u) - 0.3 * np.sin(2 * u),
+                         0.5 * np.sin(3 * u)])
+    return x + 0.01 * np.random.default_rng(seed).normal(size=x.shape)
+
+
+def _fd_check(f, g, x, idx, h=1e-7):
+    err, scale = 0.0, np.max(np.abs(g))
+    for i in idx:
+        for k in range(3):
+            xp, xm = x.copy(), x.copy()
+            xp[i, k] += h
+            xm[i, k] -= h
+            err = max(err, abs((f(xp) - f(xm)) / (2 * h) - g[i, k]))
+    return err, scale
+
+
+def _perturbed(model, amp=0.02, seed=0):
+    prob = cr.make_problem(model)
+    x = cr.initial_geometry(model)
+    x = x + amp * prob.delta * np.random.default_rng(seed).normal(size=x.shape)
+    return prob, x
+
+
+def test_writhe_gradient_matches_finite_differences_of_the_gauss_writhe():
+    x = _trefoilish()
+    g = cr.writhe_gradient(x)
+    err, scale = _fd_check(writhe, g, x, range(0, 48, 5), h=1e-6)
+    assert err <= FD_REL * scale
+
+
+def test_writhe_obeys_lk_equals_tw_plus_wr():
+    # ribbon: push-off along the part of the radial direction normal to each bond
+    x = _trefoilish(M=120)
+    t = np.roll(x, -1, 0) - x
+    t /= np.linalg.norm(t, axis=1)[:, None]
+    rad = np.column_stack([x[:, 0], x[:, 1], np.zeros(len(x))])
+    u = rad - np.sum(rad * t, axis=1)[:, None] * t
+    u /= np.linalg.norm(u, axis=1)[:, None]
+    sides = x + 1e-3 * u
+    lk = gauss_linking_number(x, sides)
+    tw, wr = ring_twist(x, sides), writhe(x)
+    assert abs(lk - round(lk)) < 1e-6
+    # White's theorem for the polygonal ribbon (discretisation 1e-3 at 120 vertices)
+    assert abs(tw + wr - lk) < 1e-3
+
+
+def test_twist_energy_gradient_matches_finite_differences():
+    model = cr.ChiralRings(lk_ring=3.0, alpha_B_per_L2=0.0, **SMALL)
+    prob, x = _perturbed(model, amp=0.2)
+    g = cr.twist_gradient(x, prob)
+    err, scale = _fd_check(lambda y: cr.twist_energy(y, prob), g, x, range(0, 80, 7))
+    assert err <= FD_REL * scale
+
+
+@pytest.mark.parametrize("alpha", [800.0, -300.0])
+def test_chiral_energy_gradient_matches_finite_differences(alpha):
+    model = cr.ChiralRings(lk_ring=0.0, alpha_B_per_L2=alpha, **SMALL)
+    prob, x = _perturbed(model, amp=0.2)
+    pairs = cr.chiral_pairs(x, prob, margin=0.5 * prob.delta)
+    E, g = cr.chiral_energy_gradient(x, prob, pairs)
+    assert E != 0.0
+    err, scale = _fd_check(lambda y: cr.chiral_energy_gradient(y, prob, pairs,
+                                                               want_grad=False)[0],
+                           g, x, range(0, 80, 7))
+    assert err <= FD_REL * scale
+
+
+def test_bilateral_gradient_matches_finite_differences():
+    model = cr.ChiralRings(lk_ring=0.0, **SMALL)
+    prob, x = _perturbed(model, amp=0.02)
+    cand = cr.bilateral_candidates(x, prob)
+    _, g = cr.bilateral_energy_gradient(x, prob, cand)
+    err, scale = _fd_check(lambda y: cr.bilateral_energy_gradient(y, prob, cand,
+                                                                  want_grad=False)[0],
+                           g, x, range(0, 80, 7), h=1e-9)
+    assert err <= 1e-5 * scale
+
+
+def test_chiral_energy_flips_sign_under_reflection():
+    model = cr.ChiralRings(lk_ring=0.0, alpha_B_per_L2=1000.0, **SMALL)
+    prob, x = _perturbed(model, amp=0.1)
+    mirror = x * np.array([1.0, 1.0, -1.0])
+    E = cr.chiral_energy_gradient(x, prob, want_grad=False)[0]
+    Em = cr.chiral_energy_gradient(mirror, prob, want_grad=False)[0]
+    assert E > 0                     # the left-handed (Lk_12 = -1) link is disfavoured
+    assert Em == pytest.approx(-E, rel=1e-12)
+
+
+def test_chiral_energy_is_alpha_times_the_contact_integral_of_tan_half_eta():
+    # the uniform start has eta = 2 asin(pi Delta/L) along the whole contact (length L)
+    # the seed's Delta/L = 0.02 (no relaxation here, so the full size is cheap)
+    model = cr.ChiralRings(lk_ring=0.0, alpha_B_per_L2=1.0, start_noise=0.0)
+    prob = cr.make_problem(model)
+    x = cr.initial_geometry(model)
+    E = cr.chiral_energy_gradient(x, prob, want_grad=False)[0]
+    eta = 2 * math.asin(math.pi * model.diameter_over_length)
+    # 0.2 %: the ply on a torus differs from the straight uniform ply at O((Delta/L)^2)
+    assert E == pytest.approx(math.tan(eta / 2) * 1.0, rel=2e-3)
+    # and against closed_braid's own braid-angle measurement (closest point on the
+    # polyline) on the same torus ply sampled four times finer (its O(b^2) error < 0.1 %)
+    fine = cb.ClosedBraid(topology="link", n=1, diameter_nm=0.02, diameter_over_length=0.02,
+                          bending_stiffness_pN_nm2=1.0, spacing_over_radius=0.25,
+                          start_noise=0.0)
+    m = cb.measure(np.vstack(cb.initial_geometry(fine)), fine)
+    ref = float(np.sum(np.tan(m["eta"] / 2)) * fine.bead_spacing_nm)
+    assert E == pytest.approx(ref, rel=2e-3)
+
+
+def test_small_alpha_energy_slope_is_the_contact_integral():
+    """Hellmann-Feynman: dE*/dalpha at alpha = 0 is int tan(eta/2) w ds at the alpha = 0
+    minimum (here measured by closed_braid.measure, an independent partner search)."""
+    base = cr.ChiralRings(lk_ring=0.0, alpha_B_per_L2=0.0, **SMALL)
+    r0 = cr.solve(base, stability=False)
+    assert r0["converged"]
+    alpha = 2.0
+    r1 = cr.solve(dataclass_replace(base, alpha_B_per_L2=alpha), r0["x"], stability=False)
+    assert r1["converged"]
+    slope = (r1["energy_B_per_L"] - r0["energy_B_per_L"]) / alpha
+    prob = cr.make_problem(base)
+    ref = cr.chiral_energy_gradient(r0["x"], prob, alpha=1.0, want_grad=False)[0]
+    # the second-order term (alpha/2) d^2E*/dalpha^2 is below 1e-3 of the slope here
+    assert slope == pytest.approx(ref, rel=1e-3)
+    # and the slope is tan(eta/2) over the contact (length L) of the uniform ply, within
+    # the torus ply's O((Delta/L)^2) difference
+    eta = 2 * math.asin(math.pi * base.diameter_over_length)
+    assert slope == pytest.approx(math.tan(eta / 2), rel=5e-3)
+
+
+def test_reproduces_closed_braid_without_twist_load():
+    braid = cb.ClosedBraid(topology="link", n=2, diameter_nm=0.05, diameter_over_length=0.05,
+                           bending_stiffness_pN_nm2=1.0, spacing_over_radius=1.0)
+    ref = cb.solve(braid, check_saddle=False)
+    wr = np.mean(ref["writhe_per_ring"])
+    model = cr.ChiralRings(lk_ring=float(wr), alpha_B_per_L2=0.0, n=2, contact="hard",
+                           **SMALL)
+    res = cr.solve(model, stability=False)
+    assert res["converged"]
+    # same energy (bending) within 1e-4 relative, same mean braid angle within 1e-3 rad
+    assert res["energy_terms_B_per_L"]["bend"] == pytest.approx(
+        ref["bending_energy_over_B_per_L"], rel=1e-4)
+    mine = cb.measure(res["x"], braid)          # closed_braid's own measurement
+    assert mine["eta_mean"] == pytest.approx(ref["eta_mean"], abs=1e-3)
+    assert mine["pressure_mean"] == pytest.approx(ref["pressure_mean"], rel=1e-2)
+    assert res["linking_number"] == pytest.approx(-2.0, abs=1e-6)
+
+
+def test_bad_input_is_refused():
+    with pytest.raises(UserError, match="contact"):
+        cr.ChiralRings(contact="glue")
+    with pytest.raises(UserError, match="spacing_over_diameter"):
+        cr.ChiralRings(spacing_over_diameter=0.8)
+    with pytest.raises(UserError, match="twist_over_bend"):
+        cr.ChiralRings(twist_over_bend=-1.0)
+
+
+def dataclass_replace(obj, **kw):
+    import dataclasses
+
+    return dataclasses.replace(obj, **kw)
