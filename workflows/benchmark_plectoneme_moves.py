@@ -113,7 +113,8 @@ def reference(n_draws=6000, batches=20, seed=12345, n_turns=0.0) -> tuple[list[s
     sem = est.std(axis=0, ddof=1) / math.sqrt(batches)
     kish = w.sum() ** 2 / np.sum(w * w)
     ref = {"z": mean[0], "z_sem": sem[0], "wr": mean[1], "wr_sem": sem[1],
-           "wr2": mean[2], "wr2_sem": sem[2], "free_z": z.mean(), "free_z_sem": z.std() / math.sqrt(z.size),
+           "wr2": mean[2], "wr2_sem": sem[2], "free_z": z.mean(),
+           "free_z_sem": z.std() / math.sqrt(z.size),
            "kish": kish / z.size}
     lines = [f"# 2. reference at n = {n_turns}: {z.size} exact free-WLC draws weighted by wall, "
              "WCA, bead plane and twist (Lk fixed; trap in series)",
@@ -203,6 +204,8 @@ def main(argv=None) -> int:
     ap.add_argument("--skip-runs", action="store_true", help="only parts 1 and 2")
     ap.add_argument("--runs", nargs="*", default=None,
                     help="directories holding finished runs s<seed>_m<mc_moves>")
+    ap.add_argument("--wait", action="store_true",
+                    help="with --runs: wait for the runs' summary.json to appear")
     ap.add_argument("--draws", type=int, default=6000)
     ap.add_argument("--out", default=str(HERE / "results" / "benchmark_plectoneme_moves.txt"))
     args = ap.parse_args(argv)
@@ -218,6 +221,11 @@ def main(argv=None) -> int:
     lines = head + [""] + per_move() + [""]
     ref_lines, ref = reference(n_draws=args.draws)
     lines += ref_lines + [""]
+    if args.wait and args.runs:
+        names = [f"s{sd}_m{nm}" for sd in args.seeds for nm in (0, s.mc_moves)]
+        while not all(any(os.path.exists(os.path.join(dd, n, "summary.json"))
+                          for dd in args.runs) for n in names):
+            time.sleep(10)
     if not args.skip_runs:
         tmp = tempfile.mkdtemp(prefix="bench_plect_moves_")
         try:

@@ -16,14 +16,15 @@ drawn at random with fixed probabilities):
 
 * ``crankshaft``: DNA beads i..j (1 ... ``crank_max_beads``, between the surface bead and
   the attachment) and the side particles of bonds i-1..j turned by an angle uniform in
-  [-A, A] (A below) about the line through beads i-1 and j+1. The frames inside the arc keep their
-  relative twist; the writhe the move makes shows up as twist at the two pivot joints,
-  which the twist energy prices.
+  [-A, A] (A below) about the line through beads i-1 and j+1. The frames inside the arc
+  keep their relative twist; the writhe the move makes shows up as twist at the two pivot
+  joints, which the twist energy prices.
 * ``pivot``: the top, beads k+1..N (attachment included) and the side particles of bonds
   k..N-1, turned about bead k (k = 0 ... N-1) by an angle uniform in
-  [-``pivot_angle_rad``, ``pivot_angle_rad``] about an axis uniform on the sphere; the bead's orientation particle m is translated with the
-  attachment (the bead keeps its angle, so the stiff trap is not disturbed; the change of
-  the last bond's frame is priced by the bead clamp).
+  [-``pivot_angle_rad``, ``pivot_angle_rad``] about an axis uniform on the sphere; the
+  bead's orientation particle m is translated with the attachment (the bead keeps its
+  angle, so the stiff trap is not disturbed; the change of the last bond's frame is priced
+  by the bead clamp).
 * ``frame``: a run of consecutive frames k..j (1 ... ``frame_max`` slots; slot q < N is
   side particle q, turned about its own bond through bead q; slot N is m, turned about the
   vertical through the attachment, which the trap prices) turned by the same angle psi
@@ -234,7 +235,8 @@ class PlectonemeMoves(ChainMoves):
         absum = run_twist_moves(pos, self.energy.params, self._chain, self._sides, self._m,
                                 self._bnd, self._mobile, self._cum, self.crank_max,
                                 self.crank_angle, self.pivot_angle, self.sweep_nm,
-                                self.crank_reach_nm, self.reach_nm, self.bond_max_nm, self.frame_angle, self.frame_max, self.ball_nm, self.kT,
+                                self.crank_reach_nm, self.reach_nm, self.bond_max_nm,
+                                self.frame_angle, self.frame_max, self.ball_nm, self.kT,
                                 uni, gau, self._stats, terms)
         self._tally(before, TWIST_KINDS)
         return terms, float(absum)
@@ -244,7 +246,8 @@ class PlectonemeMoves(ChainMoves):
         return {"crank_angle_rad": self.crank_angle, "pivot_angle_rad": self.pivot_angle,
                 "frame_angle_rad": self.frame_angle, "ball_nm": self.ball_nm,
                 "crank_max_beads": self.crank_max, "frame_max": self.frame_max,
-                "sweep_nm": self.sweep_nm, "reach_nm": self.reach_nm if math.isfinite(self.reach_nm) else None,
+                "sweep_nm": self.sweep_nm,
+                "reach_nm": self.reach_nm if math.isfinite(self.reach_nm) else None,
                 "crank_reach_nm": self.crank_reach_nm,
                 "bond_max_nm": self.bond_max_nm, "moves_per_call": self.moves_per_call,
                 "guard_checks": self.guard_checks,
