@@ -62,10 +62,10 @@ MC_MOVES = 500
 MC_MOVES_HELP = ("twist-aware Metropolis moves after every report interval (crankshaft, pivot, "
                  "frame and particle moves 1:6:1:1; dnabraid.run.twist_moves): the same "
                  "equilibrium, sampled far faster. 1000 nm at 0.5 pN, n = 0, 4 replicas, "
-                 "default steps, seed 1: 500 moves converge (797.1 +- 1.0 nm against the "
-                 "independent reference 798.9 +- 0.6 nm, R-hat 1.009, ESS 364; 507 CPU s) where "
-                 "Brownian dynamics alone does not (795.4 +- 20.1 nm, R-hat 2.57, ESS 5; 378 "
-                 "CPU s); ~25 us per move at 201 beads "
+                 "default steps, seeds 1 and 3: 500 moves converge (797.1 +- 1.0 and 797.3 +- "
+                 "0.7 nm against the independent reference 799.1 +- 0.4 nm; R-hat 1.009, "
+                 "1.002; ESS 364, 694; 507 and 534 CPU s) where Brownian dynamics alone does "
+                 "not (R-hat 2.6, 3.0; ESS 5; 378 and 398 CPU s); ~25 us per move at 201 beads "
                  "(workflows/results/benchmark_plectoneme_moves.txt). 0 = Brownian dynamics "
                  "alone (physical kinetics; the moves' time correlations are not physical)")
 
