@@ -110,7 +110,8 @@ def buckling(rows) -> dict:
                          * la / (la - lb)) if la > 0 > lb else None
             return {"bracket_B_per_L2": [a["alpha_B_per_L2"], b["alpha_B_per_L2"]],
                     "writhe_jump": jump, "lam_min_zero_interpolated_B_per_L2": alpha_lin}
-    return {"bracket_B_per_L2": None}
+    return {"bracket_B_per_L2": None, "note": "no sign change or writhe jump on the "
+            "alphas reached"}
 
 
 def write_md(res) -> str:
@@ -139,7 +140,10 @@ def write_md(res) -> str:
         r0 = rows[0]
         L.append(f"| {lk} | {r0['eta_mean_rad']:+.4f} | {r0['twist_per_ring'][0]:+.3f} | "
                  f"{r0['T1_B_per_L']:+.3f} | {res['buckling'][lk]['bracket_B_per_L2']} |")
-    L += ["", f"Wall time {res['wall_time_s']:.0f} s.", ""]
+    L += ["", f"Wall time {res['wall_time_s']:.0f} s (summed solver time of the longest "
+          "branch when assembled from the logs). "
+          + ("" if res.get("complete", True) else "PARTIAL: assembled from the branch logs of "
+             "an interrupted run; the missing alphas were not reached."), ""]
     return "\n".join(L)
 
 
@@ -172,12 +176,45 @@ def plot(res, path):
     fig.savefig(path, dpi=120)
 
 
+def finish(branches: dict, wall_time_s: float, complete: bool) -> None:
+    res = {"model": {"diameter_over_length": 0.02, "twist_over_bend": cr.DNA_TWIST_OVER_BEND,
+                     "contact": "bilateral", "spacing_over_diameter": 0.5,
+                     "n": 1, "handedness": "left"},
+           "branches": branches, "complete": complete, "slide32_read_off": SLIDE32_READ_OFF}
+    res["buckling"] = {k: buckling(v) for k, v in branches.items()}
+    res["wall_time_s"] = wall_time_s
+    (OUT / "chiral_rings.json").write_text(json.dumps(res, indent=1))
+    (OUT / "chiral_rings.md").write_text(write_md(res))
+    plot(res, OUT / "chiral_rings.png")
+    print(f"wrote {OUT / 'chiral_rings.json'} ({'complete' if complete else 'partial'})",
+          flush=True)
+
+
+def assemble() -> int:
+    branches = {}
+    wall = 0.0
+    for lk in LADDER:
+        f = WORK / f"branch_{lk:+.0f}.jsonl"
+        rows = [json.loads(t) for t in f.read_text().splitlines() if t.strip()] \
+            if f.exists() else []
+        if rows:
+            branches[f"{lk:+.0f}"] = rows
+            wall = max(wall, sum(r["wall_time_s"] for r in rows))
+    finish(branches, wall, complete=False)
+    return 0
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--quick", action="store_true", help="fewer alphas and iterations")
     ap.add_argument("--workers", type=int, default=4)
+    ap.add_argument("--assemble", action="store_true",
+                    help="only write the results from the branch logs already written "
+                         "(chiral_rings.work/branch_*.jsonl), e.g. of an interrupted run")
     a = ap.parse_args(argv)
     OUT.mkdir(exist_ok=True)
+    if a.assemble:
+        return assemble()
     t0 = time.perf_counter()
     jobs = []
     for lk in LADDER:
@@ -187,17 +224,8 @@ def main(argv=None):
         jobs.append((lk, al, a.quick))
     with mp.get_context("fork").Pool(a.workers) as pool:
         out = pool.map(branch, jobs, chunksize=1)
-    res = {"model": {"diameter_over_length": 0.02, "twist_over_bend": cr.DNA_TWIST_OVER_BEND,
-                     "contact": "bilateral", "spacing_over_diameter": 0.5,
-                     "n": 1, "handedness": "left"},
-           "branches": {f"{lk:+.0f}": rows for lk, rows in zip(LADDER, out)},
-           "slide32_read_off": SLIDE32_READ_OFF}
-    res["buckling"] = {k: buckling(v) for k, v in res["branches"].items()}
-    res["wall_time_s"] = time.perf_counter() - t0
-    (OUT / "chiral_rings.json").write_text(json.dumps(res, indent=1))
-    (OUT / "chiral_rings.md").write_text(write_md(res))
-    plot(res, OUT / "chiral_rings.png")
-    print(f"wrote {OUT / 'chiral_rings.json'} in {res['wall_time_s']:.0f} s", flush=True)
+    finish({f"{lk:+.0f}": rows for lk, rows in zip(LADDER, out)},
+           time.perf_counter() - t0, complete=True)
     return 0
 
 
