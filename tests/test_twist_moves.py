@@ -190,7 +190,7 @@ def test_plectoneme_scene_wires_the_moves():
 def test_passage_check_sees_a_bond_swept_through_another():
     """A rod pivoted about bead 2 through a bond across its path is refused; a short turn
     that stays clear is not (dnabraid.kernels.twist.passage_free)."""
-    from dnabraid.kernels.twist import passage_free
+    from dnabraid.kernels.twist_loop import passage_free
 
     pos = np.array([[10.0, -3.0, 0.0], [10.0, 3.0, 0.0], [0.0, 0.0, 0.0], [0.0, 0.0, 5.0],
                     [0.0, 0.0, 10.0]])

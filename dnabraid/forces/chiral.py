@@ -31,7 +31,7 @@ evaluates both directions of every listed pair that passes that midpoint test.
 Two evaluators compute the same numbers (tested against the twin to 1e-10):
 
 * ``numba`` (default when numba is installed): :func:`_pair_loop`, one compiled loop over
-  pairs and sample points writing straight into the force array, and :func:`_build_loop`
+  pairs and sample points writing straight into the force array, and :func:`build_pair_loop`
   for the list; compiled on first use with ``cache=True`` (about 8 s the first time on this
   machine, 0.2 s from the on-disk cache afterwards; numba is imported only then);
 * ``numpy`` (fallback): :func:`pair_terms_fast`, the twin's vectorised
@@ -166,7 +166,7 @@ def pair_terms_fast(pos, seg, a, b, kernel, q):
 
 # ---------------------------------------------------------------------------------------------
 # Compiled path. The two functions below are plain Python (readable, and runnable as such on a
-# few pairs); _jit() compiles them with numba on first use, cached on disk (cache=True), so
+# few pairs); compile_kernel() compiles them with numba on first use, cached on disk (cache=True), so
 # numba is imported only when a chiral force is first evaluated. The numpy pair_terms_fast
 # stays the fallback without numba; both are tested against the twin.
 # ---------------------------------------------------------------------------------------------
@@ -385,7 +385,7 @@ def _pair_loop(pos, seg, a, b, q, delta, rho, r_s, r_c, ncoef, scale, out):
     return e_tot
 
 
-def _build_loop(pos, seg, chain_id, pos_in_chain, chain_nseg, ring, exclude, reach):
+def build_pair_loop(pos, seg, chain_id, pos_in_chain, chain_nseg, ring, exclude, reach):
     """Verlet list: segment pairs (a < b) with |m_b - m_a| < reach + (l_a + l_b)/2 that
     :func:`~dnabraid.forces.reference_chiral.pair_allowed` admits.
 
@@ -486,7 +486,7 @@ HAVE_NUMBA = importlib.util.find_spec("numba") is not None
 _COMPILED = {}
 
 
-def _jit(fn):
+def compile_kernel(fn):
     """``numba.njit(cache=True)(fn)``, made once per process."""
     k = _COMPILED.get(fn.__name__)
     if k is None:
@@ -504,7 +504,7 @@ def pair_terms_numba(pos, seg, a, b, kernel, q):
     """
     pos = np.ascontiguousarray(pos, dtype=np.float64)
     grad = np.zeros_like(pos)
-    e = _jit(_pair_loop)(pos, np.ascontiguousarray(seg, np.int64),
+    e = compile_kernel(_pair_loop)(pos, np.ascontiguousarray(seg, np.int64),
                          np.ascontiguousarray(a, np.int64), np.ascontiguousarray(b, np.int64),
                          int(q), kernel.delta, kernel.range, kernel.r_s, kernel.r_c,
                          np.ascontiguousarray(kernel.ncoef, np.float64), 1.0, grad)
@@ -576,7 +576,7 @@ class ChiralEvaluator:
 
     def _build(self, pos):
         if self.uses_numba:
-            self._a, self._b = _jit(_build_loop)(
+            self._a, self._b = compile_kernel(build_pair_loop)(
                 pos, self.seg, self._cid, self._pic, self._nseg, self._ring,
                 self.exclude_neighbours, self._reach(pos))
             self._ref = pos.copy()
@@ -615,7 +615,7 @@ class ChiralEvaluator:
             self._build(pos)
         else:
             if self.uses_numba:
-                moved2 = _jit(_max_disp2)(pos, self._ref)
+                moved2 = compile_kernel(_max_disp2)(pos, self._ref)
             else:
                 moved2 = np.max(np.sum((pos - self._ref) ** 2, axis=1))
             if moved2 > 0.25 * self.skin**2:
@@ -629,7 +629,7 @@ class ChiralEvaluator:
         if self._kpar is None:
             self._kpar = (k.delta, k.range, k.r_s, k.r_c,
                           np.ascontiguousarray(k.ncoef, np.float64))
-        return _jit(_pair_loop)(pos, self.seg, a, b, self.q, *self._kpar, scale, out)
+        return compile_kernel(_pair_loop)(pos, self.seg, a, b, self.q, *self._kpar, scale, out)
 
     def energy_grad(self, pos):
         """(E, dE/dx) of Eq. (C1) per unit alpha: nm and dimensionless (N, 3)."""

@@ -551,10 +551,10 @@ class CapsuleEvaluator:
         ln = np.linalg.norm(x1 - x0, axis=1)
         reach = self.contact + 2.5 * self.skin + 0.5 * float(ln.max())
         if self.numba:
-            from .chiral import _build_loop, _jit
+            from .chiral import build_pair_loop, compile_kernel
 
             zero = np.zeros(len(self.seg), np.int64)
-            self._a, self._b = _jit(_build_loop)(
+            self._a, self._b = compile_kernel(build_pair_loop)(
                 pos, self.seg, self.chain_id, zero, zero, np.zeros(len(self.seg), np.bool_),
                 2**62, reach)
         else:
@@ -581,9 +581,9 @@ class CapsuleEvaluator:
         a, b = self.candidate_pairs(pos)
         grad = np.zeros_like(pos)
         if self.numba:
-            from .chiral import _jit
+            from .chiral import compile_kernel
 
-            e = _jit(_capsule_loop)(pos, self.seg, a, b, self.contact, float(k_pN_per_nm),
+            e = compile_kernel(_capsule_loop)(pos, self.seg, a, b, self.contact, float(k_pN_per_nm),
                                     1.0, grad)
             return float(e), grad
         pairs = np.column_stack([a, b])

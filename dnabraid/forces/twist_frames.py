@@ -81,7 +81,7 @@ def _dot(p, q):
     return "+".join(f"{p}{a}*{q}{a}" for a in _AX)
 
 
-def _omega_expression(t1, w1, t2, w2, *, unit_t1=False, unit_t2=False) -> str:
+def omega_expression(t1, w1, t2, w2, *, unit_t1=False, unit_t2=False) -> str:
     """Lepton expression for 0.5 g omega^2 from component strings of tangents and side vectors.
 
     ``t1, t2``: 3 component strings of the (unnormalised unless ``unit_*``) tangents;
@@ -112,7 +112,7 @@ def _omega_expression(t1, w1, t2, w2, *, unit_t1=False, unit_t2=False) -> str:
     return "; ".join(defs)
 
 
-def _diff(i, j):
+def diff_expression(i, j):
     """Components of r_j - r_i for compound-bond particle slots i, j (1-based)."""
     return [f"{a}{j}-{a}{i}" for a in _AX]
 
@@ -136,7 +136,7 @@ def twist_force(joints, g_pN_nm, *, name: str = "twist") -> openmm.CustomCompoun
         Joint stiffness g = C kT / b (pN nm per rad^2).
     """
     joints = np.asarray(joints, dtype=int).reshape(-1, 5)
-    expr = _omega_expression(_diff(1, 2), _diff(1, 4), _diff(2, 3), _diff(2, 5))
+    expr = omega_expression(diff_expression(1, 2), diff_expression(1, 4), diff_expression(2, 3), diff_expression(2, 5))
     f = _new_force(5, expr, name)
     g = np.broadcast_to(np.asarray(g_pN_nm, float), (len(joints),))
     for jt, gg in zip(joints, g):
@@ -163,8 +163,8 @@ def twist_anchor_force(bonds, tangent, material, g_pN_nm, *,
     t = t / np.linalg.norm(t)
     m = m - np.dot(m, t) * t
     m = m / np.linalg.norm(m)
-    expr = _omega_expression([repr(float(x)) for x in t], [repr(float(x)) for x in m],
-                             _diff(1, 2), _diff(1, 3), unit_t1=True)
+    expr = omega_expression([repr(float(x)) for x in t], [repr(float(x)) for x in m],
+                             diff_expression(1, 2), diff_expression(1, 3), unit_t1=True)
     f = _new_force(3, expr, name)
     for bd in np.asarray(bonds, dtype=int).reshape(-1, 3):
         f.addBond([int(x) for x in bd], [float(g_pN_nm) * PN_NM_IN_KJ_MOL])
@@ -188,8 +188,8 @@ def twist_bead_force(bonds, g_pN_nm, axis=(0.0, 0.0, 1.0), *,
     """
     a = np.asarray(axis, float)
     a = a / np.linalg.norm(a)
-    expr = _omega_expression(_diff(1, 2), _diff(1, 3), [repr(float(x)) for x in a],
-                             _diff(2, 4), unit_t2=True)
+    expr = omega_expression(diff_expression(1, 2), diff_expression(1, 3), [repr(float(x)) for x in a],
+                             diff_expression(2, 4), unit_t2=True)
     f = _new_force(4, expr, name)
     for bd in np.asarray(bonds, dtype=int).reshape(-1, 4):
         f.addBond([int(x) for x in bd], [float(g_pN_nm) * PN_NM_IN_KJ_MOL])

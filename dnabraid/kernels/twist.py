@@ -1,5 +1,5 @@
 """Local energies of torsionally constrained DNA (the plectoneme's twist frames), compiled
-with numba, and the twist-aware Metropolis loop that uses them.
+with numba.
 
 Twins of the OpenMM forces of :mod:`dnabraid.forces.twist_frames` (dnabraid units: nm,
 pN, pN nm), read by :class:`dnabraid.kernels.chain.LocalEnergy` into its parameters:
@@ -8,7 +8,7 @@ pN, pN nm), read by :class:`dnabraid.kernels.chain.LocalEnergy` into its paramet
   ``twist_bead``, one term): U = g/2 omega^2 per joint, omega = atan2(sin, cos) of the
   rotation about t_2 that takes the parallel transport of u_1 onto u_2, from the same
   unnormalised formula as the Lepton expression (:func:`_omega`, see
-  ``twist_frames._omega_expression``). A joint is stored with its type (0: interior
+  ``twist_frames.omega_expression``). A joint is stored with its type (0: interior
   ``(r_i, r_i+1, r_i+2, s_i, s_i+1)``, 1: surface clamp ``(r_0, r_1, s_0)`` against a fixed
   unit tangent and material vector, 2: bead clamp ``(r_N-1, r_N, s_N-1, m)`` against the
   fixed bead axis), its particles, its stiffness g and its fixed vectors (the constants of
@@ -24,8 +24,8 @@ out (omega is invariant under a rotation of all five), but the clamps never are 
 fixed frames do not turn with a rigid move). The plane terms change for the moved DNA
 beads, or all of them when the attachment moves (a pivot of the top).
 
-The Monte Carlo loop :func:`run_twist_moves` is documented in
-:mod:`dnabraid.run.twist_moves`.
+The Monte Carlo loop that uses them is :mod:`dnabraid.kernels.twist_loop` (documented in
+:mod:`dnabraid.run.twist_moves`).
 """
 
 from __future__ import annotations
@@ -37,10 +37,9 @@ import numba
 import numpy as np
 
 from ..units import PN_NM_IN_KJ_MOL
-from . import chain as _ch
 
 __all__ = ["omega", "joint_energy", "twist_total", "twist_delta", "plane_total",
-           "plane_delta", "run_twist_moves", "TWIST_NAMES"]
+           "plane_delta", "TWIST_NAMES"]
 
 #: Names of the twist forces (one term ``twist``), by the particles of a joint.
 TWIST_NAMES = {"twist": 5, "twist_anchor": 3, "twist_bead": 4}
@@ -62,7 +61,7 @@ def read_twist_force(f) -> list:
     """Joints ``(type, particles, g pN nm, fixed vector (6,))`` of a twist force
     (:func:`~dnabraid.forces.twist_frames.twist_force`, ``twist_anchor_force`` or
     ``twist_bead_force``), its expression checked against the factory's."""
-    from ..forces.twist_frames import _diff, _omega_expression
+    from ..forces.twist_frames import diff_expression, omega_expression
 
     name = f.getName()
     npart = f.getNumParticlesPerBond()
@@ -70,17 +69,17 @@ def read_twist_force(f) -> list:
     vec = np.zeros(6)
     if name == "twist" and npart == 5:
         typ = 0
-        want = _omega_expression(_diff(1, 2), _diff(1, 4), _diff(2, 3), _diff(2, 5))
+        want = omega_expression(diff_expression(1, 2), diff_expression(1, 4), diff_expression(2, 3), diff_expression(2, 5))
     elif name == "twist_anchor" and npart == 3:
         typ = 1
         t, m = _parse_vector(expr, "ta1"), _parse_vector(expr, "wv1")
-        want = _omega_expression(t, m, _diff(1, 2), _diff(1, 3), unit_t1=True)
+        want = omega_expression(t, m, diff_expression(1, 2), diff_expression(1, 3), unit_t1=True)
         vec[:3] = [float(x) for x in t]
         vec[3:] = [float(x) for x in m]
     elif name == "twist_bead" and npart == 4:
         typ = 2
         a = _parse_vector(expr, "ta2")
-        want = _omega_expression(_diff(1, 2), _diff(1, 3), a, _diff(2, 4), unit_t2=True)
+        want = omega_expression(diff_expression(1, 2), diff_expression(1, 3), a, diff_expression(2, 4), unit_t2=True)
         vec[:3] = [float(x) for x in a]
     else:
         raise ValueError(f"LocalEnergy: twist force {name!r} with {npart} particles per bond")
@@ -146,7 +145,7 @@ def read_plane_force(f, n: int) -> dict:
 @numba.njit(cache=True)
 def _omega(t1x, t1y, t1z, w1x, w1y, w1z, t2x, t2y, t2z, w2x, w2y, w2z, unit1, unit2):
     """Joint angle omega (rad) from raw tangents t and side vectors w (the Lepton
-    expression of ``twist_frames._omega_expression``, operation for operation)."""
+    expression of ``twist_frames.omega_expression``, operation for operation)."""
     if unit1:
         pr1 = w1x * t1x + w1y * t1y + w1z * t1z
         n1 = 1.0
@@ -313,354 +312,3 @@ def plane_delta(pos, idx, new, moved, P):
                 d += P.pl_cnt[q] * (_plane_e(new[a, 2] - za0, P.pl_k)
                                     - _plane_e(pos[q, 2] - za0, P.pl_k))
     return d
-
-
-# ------------------------------------------------------------------------ Monte Carlo
-@numba.njit(cache=True)
-def _axis_rot(R, ax, ay, az, c, s):
-    t = 1.0 - c
-    R[0, 0] = c + ax * ax * t
-    R[0, 1] = ax * ay * t - az * s
-    R[0, 2] = ax * az * t + ay * s
-    R[1, 0] = ay * ax * t + az * s
-    R[1, 1] = c + ay * ay * t
-    R[1, 2] = ay * az * t - ax * s
-    R[2, 0] = az * ax * t - ay * s
-    R[2, 1] = az * ay * t + ax * s
-    R[2, 2] = c + az * az * t
-
-
-@numba.njit(cache=True)
-def _wrap(x):
-    """x mapped to [0, 2 pi)."""
-    tp = 2.0 * math.pi
-    return x - tp * math.floor(x / tp)
-
-
-@numba.njit(cache=True)
-def passage_free(pos, beads, lo, hi, cx, cy, cz, ax, ay, az, theta, bmax, hb, rb, ab, order):
-    """True when turning beads ``lo..hi`` of the strand ``beads`` by ``theta`` about the
-    unit axis (ax, ay, az) through (cx, cy, cz) can carry no bond through an unmoved one.
-
-    A bond crossing another at some angle between 0 and theta puts an endpoint of each
-    within half a bond of the crossing point, so some moved bead p and unmoved bead q
-    (or a bead on the axis and an unmoved q) come within ``bmax`` (the longest bond) of
-    each other at some angle in between. In cylinder coordinates about the axis (h, rho,
-    alpha), |q - R(t) p|^2 = dh^2 + rho_p^2 + rho_q^2 - 2 rho_p rho_q cos(alpha_q -
-    alpha_p - t), whose minimum over t in [0, theta] is exact. Bonds that share a bead
-    cannot cross: chain neighbours are not tested. Unmoved beads are binned by rho (bins of
-    bmax, a counting sort) so that each moved bead meets only those of its own and the
-    two neighbouring bins. ``hb, rb, ab, order``:
-    work arrays of the strand's length."""
-    nb = beads.shape[0]
-    # a basis (e1, e2) normal to the axis
-    if abs(ax) < 0.9:
-        e1x, e1y, e1z = 0.0, -az, ay
-    else:
-        e1x, e1y, e1z = az, 0.0, -ax
-    nn = math.sqrt(e1x * e1x + e1y * e1y + e1z * e1z)
-    e1x /= nn
-    e1y /= nn
-    e1z /= nn
-    e2x = ay * e1z - az * e1y
-    e2y = az * e1x - ax * e1z
-    e2z = ax * e1y - ay * e1x
-    for k in range(nb):
-        p = beads[k]
-        x = pos[p, 0] - cx
-        y = pos[p, 1] - cy
-        z = pos[p, 2] - cz
-        hb[k] = x * ax + y * ay + z * az
-        u = x * e1x + y * e1y + z * e1z
-        v = x * e2x + y * e2y + z * e2z
-        rb[k] = math.sqrt(u * u + v * v)
-        ab[k] = math.atan2(v, u)
-    # unmoved beads binned by distance from the axis (counting sort into ``order``)
-    inv = 1.0 / bmax
-    nbin = 1
-    for k in range(nb):
-        nbin = max(nbin, int(rb[k] * inv) + 2)
-    start = np.zeros(nbin + 1, np.int64)
-    for k in range(nb):
-        if k < lo or k > hi:
-            start[int(rb[k] * inv) + 1] += 1
-    for i in range(nbin):
-        start[i + 1] += start[i]
-    fill = start.copy()
-    for k in range(nb):
-        if k < lo or k > hi:
-            i = int(rb[k] * inv)
-            order[fill[i]] = k
-            fill[i] += 1
-    b2 = bmax * bmax
-    tlo = min(0.0, theta)
-    span = abs(theta)
-    for k in range(lo, hi + 1):
-        i = int(rb[k] * inv)
-        for c in range(start[max(i - 1, 0)], start[min(i + 2, nbin)]):
-            q = order[c]
-            dr = rb[q] - rb[k]
-            if q == k - 1 or q == k + 1:
-                continue
-            dh = hb[k] - hb[q]
-            if dh * dh + dr * dr > b2:
-                continue
-            d = ab[q] - ab[k]
-            if _wrap(d - tlo) <= span:
-                cmax = 1.0
-            else:
-                cmax = max(math.cos(d - tlo), math.cos(d - tlo - span))
-            if dh * dh + rb[k] * rb[k] + rb[q] * rb[q] - 2.0 * rb[k] * rb[q] * cmax <= b2:
-                return False
-    # beads on the axis (the pivots, unmoved) against unmoved non-neighbours
-    for k in (lo - 1, hi + 1):
-        if k < 0 or k >= nb:
-            continue
-        p = beads[k]
-        for q in range(nb):
-            if lo <= q <= hi or abs(q - k) < 2:
-                continue
-            r = beads[q]
-            dx = pos[r, 0] - pos[p, 0]
-            dy = pos[r, 1] - pos[p, 1]
-            dz = pos[r, 2] - pos[p, 2]
-            if dx * dx + dy * dy + dz * dz <= b2:
-                return False
-    return True
-
-
-@numba.njit(cache=True)
-def run_twist_moves(pos, P, beads, sides, morient, bnd, mobile, cum, crank_max, crank_angle,
-                    pivot_angle, sweep_nm, crank_reach, reach_nm, bond_max_nm, frame_angle,
-                    frame_max, ball_nm, kT, uni, gau, stats, terms):
-    """Metropolis crankshaft, pivot, frame and particle moves of a torsionally constrained
-    tether on ``pos`` (modified in place); see :mod:`dnabraid.run.twist_moves`.
-
-    ``beads`` (N + 1: surface ... attachment), ``sides`` (N, side particle of bond i),
-    ``morient`` the bead's orientation particle; ``bnd`` (N + 1,) the joint at each frame
-    boundary (0: surface clamp, 1 ... N - 1: interior joints, N: bead clamp; -1 none);
-    ``mobile`` the particles of particle moves; a rigid move turns by at most
-    ``reach_nm`` / rho (rho: the farthest moved bead's distance from the axis or centre)
-    and, when a bead travels more than ``sweep_nm``, is refused unless
-    :func:`passage_free` (bonds up to ``bond_max_nm``); ``cum`` (4,) cumulative kind
-    probabilities; ``stats`` (4, 3) attempted / refused / accepted per kind; ``terms``
-    (NTERMS,) the accepted change per term. Returns the sum of |dE| of accepted moves.
-    """
-    n = pos.shape[0]
-    nbd = beads.shape[0] - 1  # bonds N; attachment beads[N]
-    att = beads[nbd]
-    nmob = mobile.shape[0]
-    i_tw = terms.shape[0] - 1  # 'twist' is the last term, 'trap' is 6
-    if P.has_wca:
-        H = _ch.hash_build(pos, P.w_on, P.cell)
-    else:
-        H = _ch.hash_build(pos[:0], P.w_on[:0], 1.0)
-    ncon = _ch.wca_all(pos, P, H)[1] if P.has_wca else 0
-    n_on = 0
-    if P.has_wca:
-        for p in range(n):
-            if P.w_on[p]:
-                n_on += 1
-    rinv = np.eye(3)
-    center = np.zeros(3)
-    dcon = np.zeros(1, np.int64)
-    moved = np.zeros(n, np.int64)
-    idx = np.empty(n, np.int64)
-    new = np.empty((n, 3))
-    dterm = np.zeros(terms.shape[0])
-    R = np.eye(3)
-    nbe = beads.shape[0]
-    hb = np.empty(nbe)
-    rb = np.empty(nbe)
-    ab = np.empty(nbe)
-    order = np.empty(nbe, np.int64)
-    absum = 0.0
-    for t in range(uni.shape[0]):
-        r = uni[t, 0]
-        kind = 0
-        while kind < 3 and r >= cum[kind]:
-            kind += 1
-        stats[kind, 0] += 1
-        flip = False
-        rigid = True
-        m = 0
-        thr = -kT * math.log(uni[t, 5]) if uni[t, 5] > 0.0 else np.inf
-        if kind == 0:
-            # crankshaft: beads i..j (1 <= i <= j <= N-1) and the sides of bonds i-1..j
-            # turned about the line through beads i-1 and j+1
-            mmax = min(crank_max, nbd - 1)
-            if mmax < 1:
-                stats[kind, 1] += 1
-                continue
-            ln = 1 + min(int(uni[t, 3] * mmax), mmax - 1)
-            i = 1 + min(int(uni[t, 2] * (nbd - ln)), nbd - 1 - ln)
-            j = i + ln - 1
-            pa = beads[i - 1]
-            pb = beads[j + 1]
-            ax = pos[pb, 0] - pos[pa, 0]
-            ay = pos[pb, 1] - pos[pa, 1]
-            az = pos[pb, 2] - pos[pa, 2]
-            nrm = math.sqrt(ax * ax + ay * ay + az * az)
-            if nrm < 1e-9:
-                stats[kind, 1] += 1
-                continue
-            ax /= nrm
-            ay /= nrm
-            az /= nrm
-            rho = 0.0
-            for k in range(i, j + 1):
-                p = beads[k]
-                x = pos[p, 0] - pos[pa, 0]
-                y = pos[p, 1] - pos[pa, 1]
-                z = pos[p, 2] - pos[pa, 2]
-                h = x * ax + y * ay + z * az
-                rho = max(rho, x * x + y * y + z * z - h * h)
-            rho = math.sqrt(max(rho, 0.0))
-            amp = crank_angle if rho * crank_angle <= crank_reach else crank_reach / rho
-            theta = amp * (2.0 * uni[t, 4] - 1.0)
-            if rho * abs(theta) > sweep_nm and not passage_free(
-                    pos, beads, i, j, pos[pa, 0], pos[pa, 1], pos[pa, 2], ax, ay, az, theta,
-                    bond_max_nm, hb, rb, ab, order):
-                stats[kind, 1] += 1
-                continue
-            R = _ch.rotation_matrix(ax, ay, az, theta)
-            for k in range(i, j + 1):
-                p = beads[k]
-                _ch.rotate_into(pos, R, pos[pa, 0], pos[pa, 1], pos[pa, 2], p, new, m)
-                idx[m] = p
-                m += 1
-                moved[p] = m
-            for k in range(i - 1, j + 1):
-                p = sides[k]
-                _ch.rotate_into(pos, R, pos[pa, 0], pos[pa, 1], pos[pa, 2], p, new, m)
-                idx[m] = p
-                m += 1
-                moved[p] = m
-        elif kind == 1:
-            # pivot: beads k+1..N, the sides of bonds k..N-1 turned about bead k; the
-            # orientation particle translated with the attachment (the bead keeps its angle)
-            k0 = min(int(uni[t, 2] * nbd), nbd - 1)
-            gx = gau[t, 0]
-            gy = gau[t, 1]
-            gz = gau[t, 2]
-            nrm = math.sqrt(gx * gx + gy * gy + gz * gz)
-            if nrm == 0.0:
-                stats[kind, 1] += 1
-                continue
-            pc = beads[k0]
-            rho = 0.0
-            for k in range(k0 + 1, nbd + 1):
-                p = beads[k]
-                x = pos[p, 0] - pos[pc, 0]
-                y = pos[p, 1] - pos[pc, 1]
-                z = pos[p, 2] - pos[pc, 2]
-                rho = max(rho, x * x + y * y + z * z)
-            rho = math.sqrt(rho)
-            amp = pivot_angle if rho * pivot_angle <= reach_nm else reach_nm / rho
-            theta = amp * (2.0 * uni[t, 4] - 1.0)
-            if rho * abs(theta) > sweep_nm and not passage_free(
-                    pos, beads, k0 + 1, nbd, pos[pc, 0], pos[pc, 1], pos[pc, 2], gx / nrm,
-                    gy / nrm, gz / nrm, theta, bond_max_nm, hb, rb, ab, order):
-                stats[kind, 1] += 1
-                continue
-            R = _ch.rotation_matrix(gx / nrm, gy / nrm, gz / nrm, theta)
-            m_on = 0
-            for k in range(k0 + 1, nbd + 1):
-                p = beads[k]
-                _ch.rotate_into(pos, R, pos[pc, 0], pos[pc, 1], pos[pc, 2], p, new, m)
-                idx[m] = p
-                m += 1
-                moved[p] = m
-                if P.has_wca and P.w_on[p]:
-                    m_on += 1
-            for k in range(k0, nbd):
-                p = sides[k]
-                _ch.rotate_into(pos, R, pos[pc, 0], pos[pc, 1], pos[pc, 2], p, new, m)
-                idx[m] = p
-                m += 1
-                moved[p] = m
-            if morient >= 0:
-                sa = moved[att] - 1
-                for c in range(3):
-                    new[m, c] = pos[morient, c] + new[sa, c] - pos[att, c]
-                idx[m] = morient
-                m += 1
-                moved[morient] = m
-            if n_on - m_on < m_on:
-                flip = True
-                rinv = _ch.rotation_matrix(gx / nrm, gy / nrm, gz / nrm, -theta)
-                for c in range(3):
-                    center[c] = pos[pc, c]
-        elif kind == 2:
-            # frame: frames k..j (slot q < N: side q about bond q; slot N: the bead's
-            # orientation particle about the vertical through the attachment) turned by
-            # the same angle; only the joints at the run's two ends change
-            nsl = nbd + 1 if morient >= 0 else nbd
-            lmax = min(frame_max, nsl)
-            ln = 1 + min(int(uni[t, 3] * lmax), lmax - 1)
-            k0 = min(int(uni[t, 2] * (nsl - ln + 1)), nsl - ln)
-            k1 = k0 + ln - 1
-            psi = frame_angle * (2.0 * uni[t, 4] - 1.0)
-            cp = math.cos(psi)
-            sp = math.sin(psi)
-            for q in range(k0, k1 + 1):
-                if q < nbd:
-                    p = sides[q]
-                    r0 = beads[q]
-                    r1 = beads[q + 1]
-                    ax = pos[r1, 0] - pos[r0, 0]
-                    ay = pos[r1, 1] - pos[r0, 1]
-                    az = pos[r1, 2] - pos[r0, 2]
-                    nrm = math.sqrt(ax * ax + ay * ay + az * az)
-                    _axis_rot(R, ax / nrm, ay / nrm, az / nrm, cp, sp)
-                else:
-                    p = morient
-                    r0 = att
-                    _axis_rot(R, 0.0, 0.0, 1.0, cp, sp)
-                _ch.rotate_into(pos, R, pos[r0, 0], pos[r0, 1], pos[r0, 2], p, new, m)
-                idx[m] = p
-                m += 1
-                moved[p] = m
-            for c in range(dterm.shape[0]):
-                dterm[c] = 0.0
-            for b in (k0, k1 + 1):
-                if b <= nbd and bnd[b] >= 0:
-                    jj = bnd[b]
-                    dterm[i_tw] += joint_energy(pos, new, moved, P, jj, True) \
-                        - joint_energy(pos, new, moved, P, jj, False)
-            if k1 == nbd and P.has_trap:
-                # the orientation particle turned: the trap
-                i0 = P.t_i
-                j0 = P.t_j
-                dterm[6] += _ch._trap_at(pos, new, moved, P) - _ch._trap_e(
-                    pos[i0, 0], pos[i0, 1], pos[i0, 2], pos[j0, 0], pos[j0, 1], pos[j0, 2], P)
-            dE = 0.0
-            for c in range(dterm.shape[0]):
-                dE += dterm[c]
-            if dE <= 0.0 or dE < thr:
-                stats[kind, 2] += 1
-                absum += abs(dE)
-                _ch.apply_accepted(pos, new, idx, m, P, H, terms, dterm)
-            for a in range(m):
-                moved[idx[a]] = 0
-            continue
-        else:
-            p = _ch.ball_proposal(pos, mobile, nmob, ball_nm, gau[t, 0], gau[t, 1], gau[t, 2],
-                              uni[t, 2], uni[t, 3], new)
-            if p < 0:
-                stats[kind, 1] += 1
-                continue
-            idx[0] = p
-            m = 1
-            moved[p] = 1
-            rigid = False
-        dE = _ch.delta_kernel(pos, idx[:m], new[:m], moved, rigid, P, H, dterm, thr, ncon, dcon,
-                          flip, rinv, center)
-        if math.isfinite(dE) and (dE <= 0.0 or dE < thr):
-            ncon += dcon[0]
-            stats[kind, 2] += 1
-            absum += abs(dE)
-            _ch.apply_accepted(pos, new, idx, m, P, H, terms, dterm)
-        for a in range(m):
-            moved[idx[a]] = 0
-    return absum

@@ -73,7 +73,7 @@ import math
 import numpy as np
 
 from ..kernels.chain import NTERMS, LocalEnergy
-from ..kernels.twist import run_twist_moves
+from ..kernels.twist_loop import run_twist_moves
 from .chain_moves import GUARD_ABS_PN_NM, GUARD_REL, ChainMoves, kind_weights
 from .moves import MoveStats
 
