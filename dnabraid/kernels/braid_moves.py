@@ -231,6 +231,35 @@ def _near(pos, beads, ray, cx, cy, cz, r2):
 
 # ------------------------------------------------------------------------------- the loop
 @numba.njit(cache=True)
+def _line_rotation(pos, pa, pb, theta):
+    """(ok, R): the rotation by ``theta`` about the line from particle pa to pb (not ok for
+    coincident particles)."""
+    ax = pos[pb, 0] - pos[pa, 0]
+    ay = pos[pb, 1] - pos[pa, 1]
+    az = pos[pb, 2] - pos[pa, 2]
+    nrm = math.sqrt(ax * ax + ay * ay + az * az)
+    if nrm < 1e-9:
+        return False, np.eye(3)
+    return True, rotation_matrix(ax / nrm, ay / nrm, az / nrm, theta)
+
+
+@numba.njit(cache=True)
+def _centre_follows(pos, new, idx, moved, m, center, att1, att2):
+    """Appends the bead centre, translated by the mean displacement of the two (moved)
+    attachments, to the moved set; returns the new count."""
+    if moved[center] != 0:
+        return m
+    q1 = moved[att1] - 1
+    q2 = moved[att2] - 1
+    for d in range(3):
+        new[m, d] = pos[center, d] + 0.5 * (new[q1, d] - pos[att1, d] + new[q2, d]
+                                            - pos[att2, d])
+    idx[m] = center
+    moved[center] = m + 1
+    return m + 1
+
+
+@numba.njit(cache=True)
 def run_braid_moves(pos, P, c_ptr, c_beads, c_fixed, mobile, wgt, center, cum, crank_max,
                     crank_angle, bead_nm, shear_nm, shear_z_nm, twist_rad, sway_rad, pivot_rad,
                     tilt_rad, stretch_eps, stretch_ratio, kT, uni, gau, stats, terms):
@@ -383,9 +412,6 @@ def run_braid_moves(pos, P, c_ptr, c_beads, c_fixed, mobile, wgt, center, cum, c
                 th = sway_rad * (2.0 * uni[t, 2] - 1.0)
                 ang = 2.0 * math.pi * uni[t, 3]
                 R = rotation_matrix(math.cos(ang), math.sin(ang), 0.0, th)
-                sx = 0.0
-                sy = 0.0
-                sz = 0.0
                 for c in range(2):
                     a = c_beads[c_ptr[c]]
                     for k in range(1, c_ptr[c + 1] - c_ptr[c]):
@@ -397,30 +423,14 @@ def run_braid_moves(pos, P, c_ptr, c_beads, c_fixed, mobile, wgt, center, cum, c
                         idx[m] = p
                         m += 1
                         moved[p] = m
-                    q = m - 1
-                    sx += 0.5 * (new[q, 0] - pos[idx[q], 0])
-                    sy += 0.5 * (new[q, 1] - pos[idx[q], 1])
-                    sz += 0.5 * (new[q, 2] - pos[idx[q], 2])
-                if moved[center] == 0:
-                    new[m, 0] = pos[center, 0] + sx
-                    new[m, 1] = pos[center, 1] + sy
-                    new[m, 2] = pos[center, 2] + sz
-                    idx[m] = center
-                    m += 1
-                    moved[center] = m
+                m = _centre_follows(pos, new, idx, moved, m, center, b1[n1 - 1], b2[n2 - 1])
             elif kind == 5:
                 k = 1 + int(uni[t, 3] * (min(n1, n2) - 1))
                 pa = b1[k - 1]
-                pb = b2[k - 1]
-                ax = pos[pb, 0] - pos[pa, 0]
-                ay = pos[pb, 1] - pos[pa, 1]
-                az = pos[pb, 2] - pos[pa, 2]
-                nrm = math.sqrt(ax * ax + ay * ay + az * az)
-                if nrm < 1e-9:
+                ok, R = _line_rotation(pos, pa, b2[k - 1], pivot_rad * (2.0 * uni[t, 2] - 1.0))
+                if not ok:
                     stats[kind, 1] += 1
                     continue
-                R = rotation_matrix(ax / nrm, ay / nrm, az / nrm,
-                                    pivot_rad * (2.0 * uni[t, 2] - 1.0))
                 for c in range(2):
                     for kk in range(k, c_ptr[c + 1] - c_ptr[c]):
                         g = c_ptr[c] + kk
@@ -431,28 +441,13 @@ def run_braid_moves(pos, P, c_ptr, c_beads, c_fixed, mobile, wgt, center, cum, c
                         idx[m] = p
                         m += 1
                         moved[p] = m
-                if moved[center] == 0:
-                    # the centre follows the attachments' mean displacement
-                    q1 = moved[b1[n1 - 1]] - 1
-                    q2 = moved[b2[n2 - 1]] - 1
-                    for d in range(3):
-                        new[m, d] = pos[center, d] + 0.5 * (new[q1, d] - pos[b1[n1 - 1], d]
-                                                            + new[q2, d] - pos[b2[n2 - 1], d])
-                    idx[m] = center
-                    m += 1
-                    moved[center] = m
+                m = _centre_follows(pos, new, idx, moved, m, center, b1[n1 - 1], b2[n2 - 1])
             elif kind == 6:
                 pa = b1[n1 - 1]
-                pb = b2[n2 - 1]
-                ax = pos[pb, 0] - pos[pa, 0]
-                ay = pos[pb, 1] - pos[pa, 1]
-                az = pos[pb, 2] - pos[pa, 2]
-                nrm = math.sqrt(ax * ax + ay * ay + az * az)
-                if nrm < 1e-9:
+                ok, R = _line_rotation(pos, pa, b2[n2 - 1], tilt_rad * (2.0 * uni[t, 2] - 1.0))
+                if not ok:
                     stats[kind, 1] += 1
                     continue
-                R = rotation_matrix(ax / nrm, ay / nrm, az / nrm,
-                                    tilt_rad * (2.0 * uni[t, 2] - 1.0))
                 rotate_into(pos, R, pos[pa, 0], pos[pa, 1], pos[pa, 2], center, new, 0)
                 idx[0] = center
                 m = 1
@@ -461,9 +456,10 @@ def run_braid_moves(pos, P, c_ptr, c_beads, c_fixed, mobile, wgt, center, cum, c
                 eps = stretch_eps * (2.0 * uni[t, 2] - 1.0)
                 lam = math.exp(eps)
                 mu = math.exp(-stretch_ratio * eps)
-                sx = 0.0
-                sy = 0.0
-                sz = 0.0
+                if abs(pos[b1[n1 - 1], 2] - pos[b1[0], 2]) < 1e-9 or \
+                        abs(pos[b2[n2 - 1], 2] - pos[b2[0], 2]) < 1e-9:
+                    stats[kind, 1] += 1  # an attachment at its anchor's height
+                    continue
                 logj = 0.0
                 for c in range(2):
                     a = c_beads[c_ptr[c]]
@@ -472,9 +468,6 @@ def run_braid_moves(pos, P, c_ptr, c_beads, c_fixed, mobile, wgt, center, cum, c
                     tx = pos[tt, 0] - pos[a, 0]
                     ty = pos[tt, 1] - pos[a, 1]
                     tz = pos[tt, 2] - pos[a, 2]
-                    if abs(tz) < 1e-9:
-                        m = -1
-                        break
                     nm = 0
                     for k in range(1, nbc):
                         g = c_ptr[c] + k
@@ -492,20 +485,7 @@ def run_braid_moves(pos, P, c_ptr, c_beads, c_fixed, mobile, wgt, center, cum, c
                         nm += 1
                     # z of N beads scaled; the attachment's xy kept, N - 1 deviations scaled
                     logj += nm * eps + 2.0 * (nm - 1) * (-stretch_ratio * eps)
-                    q = m - 1
-                    sx += 0.5 * (new[q, 0] - pos[idx[q], 0])
-                    sy += 0.5 * (new[q, 1] - pos[idx[q], 1])
-                    sz += 0.5 * (new[q, 2] - pos[idx[q], 2])
-                if m < 0:
-                    stats[kind, 1] += 1
-                    continue
-                if moved[center] == 0:
-                    new[m, 0] = pos[center, 0] + sx
-                    new[m, 1] = pos[center, 1] + sy
-                    new[m, 2] = pos[center, 2] + sz
-                    idx[m] = center
-                    m += 1
-                    moved[center] = m
+                m = _centre_follows(pos, new, idx, moved, m, center, b1[n1 - 1], b2[n2 - 1])
             else:
                 th = twist_rad * (2.0 * uni[t, 2] - 1.0)
                 cx = pos[center, 0]
