@@ -83,10 +83,9 @@ from .chain import (
     ball_proposal,
     crank_proposal,
     delta_kernel,
-    hash_build,
+    loop_setup,
     rotate_into,
     rotation_matrix,
-    wca_all,
 )
 
 __all__ = ["BRAID_KINDS", "catenation", "run_braid_moves"]
@@ -299,18 +298,9 @@ def run_braid_moves(pos, P, c_ptr, c_beads, c_fixed, mobile, wgt, center, cum, c
     n2 = b2.shape[0]
     ray = 1e4 * _extent(pos, b1, b2)
     cat = _catenation(pos, b1, b2, ray)
-    if P.has_wca:
-        H = hash_build(pos, P.w_on, P.cell)
-    else:
-        H = hash_build(pos[:0], P.w_on[:0], 1.0)
-    ncon = wca_all(pos, P, H)[1] if P.has_wca else 0
+    H, ncon, _, dcon, moved, idx, new, dterm = loop_setup(pos, P, terms.shape[0])
     rinv = np.eye(3)
     cen = np.zeros(3)
-    dcon = np.zeros(1, np.int64)
-    moved = np.zeros(n, np.int64)
-    idx = np.empty(n, np.int64)
-    new = np.empty((n, 3))
-    dterm = np.zeros(terms.shape[0])
     nmob = mobile.shape[0]
     absum = 0.0
     for t in range(uni.shape[0]):

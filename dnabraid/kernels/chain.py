@@ -619,6 +619,26 @@ def rotate_into(pos, R, cx, cy, cz, p, new, a):
 
 
 @numba.njit(cache=True)
+def loop_setup(pos, P, nterms):
+    """The working state every compiled move loop starts from: the WCA hash of ``pos``,
+    the number of interacting WCA pairs, the number of WCA particles, and scratch arrays
+    (dcon, moved, idx, new, dterm) for :func:`delta_kernel` and :func:`apply_accepted`."""
+    n = pos.shape[0]
+    if P.has_wca:
+        H = hash_build(pos, P.w_on, P.cell)
+    else:
+        H = hash_build(pos[:0], P.w_on[:0], 1.0)
+    ncon = wca_all(pos, P, H)[1] if P.has_wca else 0
+    n_on = 0
+    if P.has_wca:
+        for p in range(n):
+            if P.w_on[p]:
+                n_on += 1
+    return (H, ncon, n_on, np.zeros(1, np.int64), np.zeros(n, np.int64),
+            np.empty(n, np.int64), np.empty((n, 3)), np.zeros(nterms))
+
+
+@numba.njit(cache=True)
 def run_chain_moves(pos, P, c_ptr, c_beads, c_fixed, mobile, cum, crank_max, crank_angle,
                     pivot_angle, bead_nm, kT, uni, gau, stats, terms):
     """Metropolis crankshaft, pivot and bead moves on ``pos`` (modified in place).
@@ -656,26 +676,11 @@ def run_chain_moves(pos, P, c_ptr, c_beads, c_fixed, mobile, cum, crank_max, cra
         Sum of |dE| over the accepted moves (pN nm), the scale of the round-off in
         ``terms``.
     """
-    n = pos.shape[0]
     nch = c_ptr.shape[0] - 1
     nmob = mobile.shape[0]
-    if P.has_wca:
-        H = hash_build(pos, P.w_on, P.cell)
-    else:
-        H = hash_build(pos[:0], P.w_on[:0], 1.0)
-    ncon = wca_all(pos, P, H)[1] if P.has_wca else 0
-    n_on = 0
-    if P.has_wca:
-        for p in range(n):
-            if P.w_on[p]:
-                n_on += 1
+    H, ncon, n_on, dcon, moved, idx, new, dterm = loop_setup(pos, P, terms.shape[0])
     rinv = np.eye(3)
     center = np.zeros(3)
-    dcon = np.zeros(1, np.int64)
-    moved = np.zeros(n, np.int64)
-    idx = np.empty(n, np.int64)
-    new = np.empty((n, 3))
-    dterm = np.zeros(terms.shape[0])
     absum = 0.0
     for t in range(uni.shape[0]):
         r = uni[t, 0]

@@ -147,28 +147,13 @@ def run_twist_moves(pos, P, beads, sides, morient, bnd, mobile, cum, crank_max, 
     probabilities; ``stats`` (4, 3) attempted / refused / accepted per kind; ``terms``
     (NTERMS,) the accepted change per term. Returns the sum of |dE| of accepted moves.
     """
-    n = pos.shape[0]
     nbd = beads.shape[0] - 1  # bonds N; attachment beads[N]
     att = beads[nbd]
     nmob = mobile.shape[0]
     i_tw = terms.shape[0] - 1  # 'twist' is the last term, 'trap' is 6
-    if P.has_wca:
-        H = _ch.hash_build(pos, P.w_on, P.cell)
-    else:
-        H = _ch.hash_build(pos[:0], P.w_on[:0], 1.0)
-    ncon = _ch.wca_all(pos, P, H)[1] if P.has_wca else 0
-    n_on = 0
-    if P.has_wca:
-        for p in range(n):
-            if P.w_on[p]:
-                n_on += 1
+    H, ncon, n_on, dcon, moved, idx, new, dterm = _ch.loop_setup(pos, P, terms.shape[0])
     rinv = np.eye(3)
     center = np.zeros(3)
-    dcon = np.zeros(1, np.int64)
-    moved = np.zeros(n, np.int64)
-    idx = np.empty(n, np.int64)
-    new = np.empty((n, 3))
-    dterm = np.zeros(terms.shape[0])
     R = np.eye(3)
     nbe = beads.shape[0]
     hb = np.empty(nbe)
