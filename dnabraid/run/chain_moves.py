@@ -332,6 +332,11 @@ class BraidMoves(ChainMoves):
         stretch.
     seed, guard_every, guard_rel, guard_abs_pN_nm
         As :class:`ChainMoves`'.
+    passage_test : bool
+        Decide the topology by :func:`dnabraid.kernels.braid_moves.no_passage` where it
+        can (no segment can meet the other strand on the straight path between the two
+        states), the Gauss sums only where it cannot; False: the Gauss sums always (the
+        same equilibrium; for benchmarks).
     """
 
     def __init__(self, energy, chains, fixed, center: int, kT_pN_nm: float, *,
@@ -342,9 +347,10 @@ class BraidMoves(ChainMoves):
                  crank_max_beads: int = 8,
                  weights=(4.0, 4.0, 0.5, 0.5, 1.0, 2.0, 1.0, 2.0), seed: int = 1,
                  guard_every: int = 100, guard_rel: float = GUARD_REL,
-                 guard_abs_pN_nm: float = GUARD_ABS_PN_NM):
+                 guard_abs_pN_nm: float = GUARD_ABS_PN_NM, passage_test: bool = True):
         if moves_per_call < 1:
             raise ValueError("moves_per_call must be >= 1")
+        self.passage_test = bool(passage_test)
         amps = (float(crank_angle_rad), float(bead_move_nm), float(shear_nm),
                 float(twist_rad), float(sway_rad), float(pivot_rad), float(tilt_rad),
                 float(stretch_eps))
@@ -427,7 +433,7 @@ class BraidMoves(ChainMoves):
                                      self.twist_rad, self.sway_rad, self.pivot_rad,
                                      self.tilt_rad, self.stretch_eps, self._ratio(pos),
                                      self.kT, uni, gau,
-                                     self._stats, terms)
+                                     self._stats, terms, self.passage_test)
         self.catenation = float(cat)
         self._tally(before, BRAID_KINDS)
         return terms, float(absum)
