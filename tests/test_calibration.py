@@ -91,3 +91,38 @@ def test_replicas_are_added_until_the_target_precision(tmp_path, target, max_rep
         assert pt["extension_nm"]["sem"] <= target and pr["met"]["extension_nm"]
     else:
         assert pt["n_replicas"] == max_replicas and not pr["met"]["extension_nm"]
+
+
+def test_a_start_drawn_at_another_force_is_away_from_equilibrium_and_not_exact():
+    """``start = 'force'``: every replica starts from its own exact draw at
+    start_force_pN (a chain stretched at 10 F has a mean extension far above the exact
+    one at F), the start is not the simulated model's equilibrium, so the verdict keeps
+    its data-driven equilibration cut; bad keys are refused."""
+    base = {"force_pN": 0.3, "length_nm": 300.0, "surface": False, "self_avoidance": False,
+            "replicas": 1}
+    eq = make_scene("tether", base)
+    far = make_scene("tether", dict(base, start="force", start_force_pN=3.0))
+    assert eq.start_is_exact and not far.start_is_exact
+    assert eq.verdict_rule()["equilibration"] is None
+    assert far.verdict_rule().get("equilibration", "auto") is not None
+    d = eq.dna()
+    n = eq.n_beads - 1
+    z_eq = discrete_wlc_exact(0.3, n, eq.bead_spacing_nm, d.kappa_kT, d.kT,
+                              stretch_k_pN_per_nm=d.k_bond)["extension_nm"]
+    z_far = discrete_wlc_exact(3.0, n, eq.bead_spacing_nm, d.kappa_kT, d.kT,
+                               stretch_k_pN_per_nm=d.k_bond)
+    zs = []
+    for seed in range(1, 9):
+        m = make_scene("tether", dict(base, start="force", start_force_pN=3.0,
+                                      seed=seed)).build()
+        zs.append(m.positions[m.attachments[0], 2] - m.positions[m.chains[0][0], 2])
+    # 8 draws at 3 pN: their mean within 4 standard errors of the exact <z> at 3 pN,
+    # and more than 20 of those standard errors above the exact <z> at 0.3 pN
+    se = math.sqrt(z_far["extension_var_nm2"] / len(zs))
+    assert abs(np.mean(zs) - z_far["extension_nm"]) < 4 * se
+    assert np.mean(zs) - z_eq > 20 * se
+    assert m.exact_start  # a thermal draw: not minimised
+    with pytest.raises(Exception, match="start_force_pN"):
+        make_scene("tether", dict(base, start="force"))
+    with pytest.raises(Exception, match="start"):
+        make_scene("tether", dict(base, start="straight"))

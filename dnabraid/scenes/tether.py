@@ -71,6 +71,12 @@ class Tether(TweezerScene):
     crank_angle_rad: float = key(2.0, "rad", CRANK_HELP)
     pivot_angle_rad: float = key(0.6, "rad", PIVOT_HELP)
     bead_move_nm: float = key(0.3, "nm", BEAD_HELP)
+    start: str = key("equilibrium", "", "'equilibrium': each replica from its own exact draw of "
+                     "the discrete WLC at force_pN (conditioned on wall and self-avoidance); "
+                     "'force': from its own exact draw at start_force_pN instead, a start away "
+                     "from equilibrium, so that the equilibration cut and the verdict are "
+                     "tested (workflows/calibration_dynamics.py)")
+    start_force_pN: float = key(0.0, "pN", "force of the 'force' start's draws (> 0)")
 
     def validate(self) -> None:
         super().validate()
@@ -81,6 +87,10 @@ class Tether(TweezerScene):
         need(0 <= self.crank_angle_rad <= math.pi, "crank_angle_rad", "must be in [0, pi]")
         need(0 <= self.pivot_angle_rad <= math.pi, "pivot_angle_rad", "must be in [0, pi]")
         need(self.bead_move_nm >= 0, "bead_move_nm", "must be >= 0")
+        need(self.start in ("equilibrium", "force"), "start",
+             "must be 'equilibrium' or 'force'")
+        need(self.start != "force" or self.start_force_pN > 0, "start_force_pN",
+             "start = 'force' needs start_force_pN > 0")
         if self.mc_moves > 0:
             need(self.crank_angle_rad > 0 or self.pivot_angle_rad > 0
                  or self.bead_move_nm > 0, "mc_moves",
@@ -95,12 +105,13 @@ class Tether(TweezerScene):
         d = kit.dna
         zeta_phys = units.stokes_friction(self.bead_radius_nm)
         zeta_attach = max(d.zeta_bead, self.bead_friction_factor * zeta_phys)
-        pos = self.equilibrium_start(d)
+        f = self.start_force_pN if self.start == "force" else self.force_pN
+        pos = self.equilibrium_start(d, force_pN=f)
         if pos is None:
             pos = random_tether(self.n_beads, self.bead_spacing_nm, d.kappa_kT, self.seed,
                                 z_min=0.5 * d.diameter_nm if self.surface else None)
         else:
-            kit.exact_start = True
+            kit.exact_start = True  # a thermal draw: minimising would straighten it
         chain = kit.add_chain(pos, "A", last_friction=zeta_attach)
         kit.add_stretch(self.stretch)
         kit.add_bend()
@@ -125,8 +136,9 @@ class Tether(TweezerScene):
                 "wall_k_pN_per_nm": d.wall_k if self.surface else 0.0,
                 "n_exclusions": n_excl}
 
-    def equilibrium_start(self, d, tries: int = 64):
-        """An exact draw of the discrete WLC under the force (stretching included;
+    def equilibrium_start(self, d, tries: int = 64, *, force_pN: float | None = None):
+        """An exact draw of the discrete WLC under the force (``force_pN``, default the
+        scene's; stretching included;
         :func:`dnabraid.continuum.wlc.sample_discrete_wlc`), or None.
 
         Draws that put a bead below the wall or two non-neighbouring beads closer than
@@ -141,7 +153,8 @@ class Tether(TweezerScene):
         gap = max(1, int(np.ceil(2 ** (1 / 6) * d.diameter_nm / self.bead_spacing_nm + 0.5)))
         rng = np.random.default_rng(self.seed)
         for _ in range(tries // 8):  # batches of 8 draws: most scenes accept the first
-            for x in sample_discrete_wlc(self.force_pN, n, self.bead_spacing_nm, d.kappa_kT,
+            f = self.force_pN if force_pN is None else force_pN
+            for x in sample_discrete_wlc(f, n, self.bead_spacing_nm, d.kappa_kT,
                                          d.kT, stretch_k_pN_per_nm=k, n_samples=8, rng=rng):
                 if self.surface and np.any(x[1:, 2] <= 0.5 * d.diameter_nm):
                     continue
@@ -155,8 +168,9 @@ class Tether(TweezerScene):
     @property
     def start_is_exact(self) -> bool:
         """True when every replica starts from an exact draw of the simulated model's own
-        equilibrium (no wall, no excluded volume: the discrete WLC under force)."""
-        return not self.surface and not self.self_avoidance
+        equilibrium (no wall, no excluded volume: the discrete WLC under force, drawn at
+        the scene's own force)."""
+        return not self.surface and not self.self_avoidance and self.start == "equilibrium"
 
     def verdict_rule(self) -> dict:
         """With exact starts each replica mean is an unbiased estimate and the replicas are

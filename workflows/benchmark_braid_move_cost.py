@@ -1,0 +1,103 @@
+"""Cost of each braid move kind on the long braid (moves alone, one core), with and without
+the topology pre-test (dnabraid.kernels.braid_moves.no_passage), interleaved in one
+process so that the ratio is measured under the same load.
+
+Each kind is run alone (weight 1, the others 0) from one configuration equilibrated by
+all kinds; both variants take the same seed, so they make the same decisions (the
+pre-test only skips Gauss sums whose answer it knows: tests/test_kernels_braid.py) and
+differ only in time. Printed and written: us per attempted move for each variant, their
+ratio, acceptance and the number refused by the topology check, and the mixture's mean
+cost at the scene's kind weights.
+
+Usage: python workflows/benchmark_braid_move_cost.py [--turns 0 2] [--moves 20000]
+       [--repeats 3]
+Writes workflows/results/benchmark_braid_move_cost.txt (appends).
+"""
+
+from __future__ import annotations
+
+import argparse
+import datetime
+import os
+import pathlib
+import time
+
+import numpy as np
+
+from dnabraid.run.chain_moves import BRAID_KINDS, BraidMoves
+from dnabraid.scenes import make_scene
+from dnabraid.scenes.braid import LONG_BRAID
+
+HERE = pathlib.Path(__file__).resolve().parent
+WEIGHTS = (4.0, 4.0, 0.5, 0.5, 1.0, 2.0, 1.0, 2.0)  # BraidMoves' default mixture
+
+
+def _amps(sc) -> dict:
+    return dict(crank_angle_rad=sc.crank_angle_rad, bead_move_nm=sc.bead_move_nm,
+                shear_nm=sc.shear_nm, shear_z_nm=sc.shear_z_nm, twist_rad=sc.twist_rad,
+                sway_rad=sc.sway_rad, pivot_rad=sc.pivot_rad, tilt_rad=sc.tilt_rad,
+                stretch_eps=sc.stretch_eps, crank_max_beads=sc.crank_max_beads)
+
+
+def table(turns: float, moves: int, repeats: int) -> list[str]:
+    sc = make_scene("braid", dict(LONG_BRAID, turns=[turns], replicas=1))
+    m = sc.build()
+    pos = np.array(sc.start_positions(m, turns), float)
+    mv = BraidMoves.for_model(m, moves_per_call=2000, seed=1, guard_every=0, **_amps(sc))
+    mv.energy.set_trap_angle(2 * np.pi * turns)
+    for _ in range(50):
+        pos, _ = mv.run(pos)
+    lines = [f"turns {turns:g}: {'kind':>10} {'us/move pre-test':>16} {'us/move Gauss only':>18} "
+             f"{'ratio':>6} {'acceptance':>10} {'refused':>8}"]
+    cost = {True: 0.0, False: 0.0}
+    for k, name in enumerate(BRAID_KINDS):
+        w = [0.0] * 8
+        w[k] = 1.0
+        best = {True: np.inf, False: np.inf}
+        stats = None
+        for _ in range(repeats):
+            for pt in (True, False):
+                mk = BraidMoves.for_model(m, moves_per_call=moves, seed=2, guard_every=0,
+                                          weights=w, passage_test=pt, **_amps(sc))
+                mk.energy.set_trap_angle(2 * np.pi * turns)
+                mk.run(pos.copy(), 200)  # compile, warm
+                t0 = time.perf_counter()
+                mk.run(pos.copy(), moves)
+                best[pt] = min(best[pt], (time.perf_counter() - t0) / moves * 1e6)
+                stats = mk.stats[name].to_dict()
+        for pt in cost:
+            cost[pt] += WEIGHTS[k] * best[pt] / sum(WEIGHTS)
+        lines.append(f"{'':8}{name:>10} {best[True]:16.1f} {best[False]:18.1f} "
+                     f"{best[False] / best[True]:6.2f} {stats['acceptance']:10.2f} "
+                     f"{stats['refused_by_constraint']:8d}")
+    lines.append(f"{'':8}{'mixture':>10} {cost[True]:16.1f} {cost[False]:18.1f} "
+                 f"{cost[False] / cost[True]:6.2f}   (kind weights {WEIGHTS})")
+    return lines
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--turns", type=float, nargs="+", default=[0.0, 2.0])
+    ap.add_argument("--moves", type=int, default=20000)
+    ap.add_argument("--repeats", type=int, default=3, help="best of this many timings")
+    ap.add_argument("--out", default=str(HERE / "results" / "benchmark_braid_move_cost.txt"))
+    a = ap.parse_args(argv)
+    head = [f"# braid move cost, long braid {LONG_BRAID}, {datetime.datetime.now():%Y-%m-%d "
+            f"%H:%M}; {os.cpu_count()} cores (load average at start {os.getloadavg()[0]:.1f}); "
+            f"{a.moves} moves per kind and variant, best of {a.repeats}; WCA change of "
+            "non-rigid moves of > 24 particles by z sweeps (kernels.chain) in both variants"]
+    print(head[0], flush=True)
+    lines = list(head)
+    for n in a.turns:
+        t = table(n, a.moves, a.repeats)
+        print("\n".join(t), flush=True)
+        lines += t
+    out = pathlib.Path(a.out)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    with open(out, "a") as fh:
+        fh.write("\n".join(lines) + "\n\n")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
