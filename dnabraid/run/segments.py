@@ -200,6 +200,8 @@ def _run_members(engine, schedule, members, settings, ckdir, chk_path, *, progre
         for mv in movers:
             if mv is not None:
                 mv.restart(seg.index)
+        # the movers' statistics run on over the points; each point records its own share
+        moves_before = [mv.summary() if mv is not None else None for mv in movers]
 
         def advance(n, fail_dir, has_moves=has_moves):
             pos = engine.advance(n, fail_dir)
@@ -258,14 +260,34 @@ def _run_members(engine, schedule, members, settings, ckdir, chk_path, *, progre
                 progress(ri * len(members))
                 observe(pos, (i + 1) % every == 0, ws)
         engine.save_checkpoint(chk_path(seg))
-        for p, mv in zip(pdirs, movers):
+        for p, mv, b in zip(pdirs, movers, moves_before):
             if mv is not None:
                 rundir.atomic_write_text(os.path.join(p, "moves.json"),
-                                         json.dumps(mv.summary()) + "\n")
+                                         json.dumps(moves_since(mv.summary(), b)) + "\n")
         for p, w in zip(pdirs, ws):
             rundir.atomic_write_text(os.path.join(p, "done.json"), json.dumps(
                 {"turns": seg.turns, "step": engine.step, "frames": w.n_frames}) + "\n")
     return dirs
+
+
+def moves_since(now: dict, before: dict) -> dict:
+    """A mover's summary for the moves made since ``before`` (an earlier summary of the same
+    mover): per-kind counts and the guard's checks differenced, the acceptance recomputed;
+    settings and the guard's largest disagreement as ``now``. A mover runs over all the
+    points of its replica, so its summary alone counts every point before this one too
+    (until 2026-12-03 the braid's moves.json of turns +3 held the counts of -3 ... +3)."""
+    out = dict(now)
+    for k, v in now.items():
+        b = before.get(k)
+        if isinstance(v, dict) and isinstance(b, dict):
+            d = {c: int(v[c]) - int(b.get(c, 0)) for c in ("attempted", "refused_by_constraint",
+                                                         "accepted") if c in v}
+            if "acceptance" in v:
+                d["acceptance"] = d["accepted"] / d["attempted"] if d.get("attempted") else None
+            out[k] = dict(v, **d)
+        elif k == "guard_checks" and b is not None:
+            out[k] = int(v) - int(b)
+    return out
 
 
 def _splitter(members):
