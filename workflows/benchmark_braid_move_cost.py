@@ -82,8 +82,8 @@ def main(argv=None) -> int:
     ap.add_argument("--repeats", type=int, default=3, help="best of this many timings")
     ap.add_argument("--out", default=str(HERE / "results" / "benchmark_braid_move_cost.txt"))
     a = ap.parse_args(argv)
-    head = [f"# braid move cost, long braid {LONG_BRAID}, {datetime.datetime.now():%Y-%m-%d "
-            f"%H:%M}; {os.cpu_count()} cores (load average at start {os.getloadavg()[0]:.1f}); "
+    stamp = datetime.datetime.now().strftime("%Y-%m-%d %H:%M")
+    head = [f"# braid move cost, long braid {LONG_BRAID}, {stamp}; {os.cpu_count()} cores (load average at start {os.getloadavg()[0]:.1f}); "
             f"{a.moves} moves per kind and variant, best of {a.repeats}; WCA change of "
             "non-rigid moves of > 24 particles by z sweeps (kernels.chain) in both variants"]
     print(head[0], flush=True)

@@ -470,7 +470,7 @@ def delta_kernel(pos, idx, new, moved, rigid, P, H, out, thr, ncon, dcon, flip, 
         out[6] += _trap_at(pos, new, moved, P) - _trap_e(pos[i, 0], pos[i, 1], pos[i, 2],
                                                          pos[j, 0], pos[j, 1], pos[j, 2], P)
     if P.has_wca:
-        if not rigid and m > _SWEEP_MIN:
+        if m > _SWEEP_MIN:
             # a large moved set: the whole WCA energy before and after, by sweeps along z
             e1, c1 = _wca_sweep(P, pos, new, moved, True)
             e0, c0 = _wca_sweep(P, pos, new, moved, False)
