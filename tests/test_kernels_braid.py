@@ -139,12 +139,10 @@ def test_braid_moves_add_up_to_the_openmm_change_and_keep_the_topology(turns):
     assert np.array_equal(new[list(m.fixed)], pos[list(m.fixed)])
 
 
-def test_a_strand_passage_changes_the_catenation_by_one():
-    """Strands straight up at x = -3 and +3 nm; strand 1's beads 9 and 11 placed beside
-    bead 10 horizontally, so that bead 10 pulled to x = +9 sweeps the triangle through
-    strand 2: the catenation (compiled and numpy) jumps by 1, which the moves refuse."""
-    sc = _scene(tether_separation_nm=6.0)
-    m = sc.build()
+def _passage_geometry():
+    """Strands straight up at x = -3 and +3 nm, strand 1's beads 9 and 11 beside bead 10
+    horizontally: (positions, strand 1, strand 2)."""
+    m = _scene(tether_separation_nm=6.0).build()
     pos = m.positions.copy()
     a, b = m.chains
     for k, (i, j) in enumerate(zip(a, b)):
@@ -152,6 +150,14 @@ def test_a_strand_passage_changes_the_catenation_by_one():
         pos[j] = (3.0, 0.0, 5.0 * k)
     pos[a[9]] = (-3.0, -2.0, 50.0)
     pos[a[11]] = (-3.0, 2.0, 50.0)
+    return pos, a, b
+
+
+def test_a_strand_passage_changes_the_catenation_by_one():
+    """Strands straight up at x = -3 and +3 nm; strand 1's beads 9 and 11 placed beside
+    bead 10 horizontally, so that bead 10 pulled to x = +9 sweeps the triangle through
+    strand 2: the catenation (compiled and numpy) jumps by 1, which the moves refuse."""
+    pos, a, b = _passage_geometry()
     c0 = catenation(pos, a, b)
     for x, want in ((1.0, 0.0), (9.0, 1.0)):
         p = pos.copy()
@@ -175,15 +181,7 @@ def test_no_passage_sees_the_strand_passage_and_only_allows_what_the_gauss_sum_a
     (forward = reverse), and it never declares safe a displacement that moved a strand
     through the other (|change| > 0.5)."""
     from dnabraid.kernels.braid_moves import no_passage
-    sc = _scene(tether_separation_nm=6.0)
-    m = sc.build()
-    pos = m.positions.copy()
-    a, b = m.chains
-    for k, (i, j) in enumerate(zip(a, b)):
-        pos[i] = (-3.0, 0.0, 5.0 * k)
-        pos[j] = (3.0, 0.0, 5.0 * k)
-    pos[a[9]] = (-3.0, -2.0, 50.0)
-    pos[a[11]] = (-3.0, 2.0, 50.0)
+    pos, a, b = _passage_geometry()
     S = np.empty((4, max(len(a), len(b)) + 1, 4))
     n1, n2 = len(a), len(b)
     V1, V2 = _extended(pos, a), _extended(pos, b)

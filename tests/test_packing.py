@@ -89,6 +89,26 @@ def test_copies_do_not_interact_even_when_close():
         pack.check_apart(parts)
 
 
+def test_only_interacting_particles_must_stay_in_their_cell():
+    """The bead centre is in no nonbonded term (WCA switch 0; its wall is bonded to its own
+    strands), so its swing does not stop a packed run (a 2 x 100 nm braid with moves did
+    stop when its centre reached 122 nm, 2026-12-03); a DNA bead that far still does."""
+    from dnabraid.run.packing import interacting_particles
+    members = _members("braid", BRAID, 2, 1.0)
+    m = members[0]
+    mask = interacting_particles(m.system)
+    assert not mask[m.bead_center]
+    assert all(mask[int(i)] for ch in m.chains for i in ch)
+    pack = pack_models(members)
+    parts = pack.split(pack.model.positions)
+    parts[1] = parts[1].copy()
+    parts[1][m.bead_center, 0] += pack.half_cell_nm + 50.0
+    pack.check_apart(parts)
+    parts[1][int(m.chains[0][5]), 0] += pack.half_cell_nm + 50.0
+    with pytest.raises(PackError, match="could interact"):
+        pack.check_apart(parts)
+
+
 def test_grid_offsets():
     for R in (1, 2, 3, 4, 5, 9):
         o = grid_offsets(R, 100.0)

@@ -165,6 +165,31 @@ def nonbonded_cutoff_nm(system: openmm.System) -> float:
     return cut
 
 
+def interacting_particles(system: openmm.System) -> np.ndarray:
+    """Mask of the particles that some nonbonded term lets interact: every particle of a
+    ``CustomNonbondedForce`` unless its per-particle switch ``on`` is 0 (the WCA's) or it is
+    in none of the force's interaction groups. Only these can make packed copies interact
+    (the magnetic bead's centre, 500 nm above its strands and swinging by tens of nm, is
+    bound to its own copy by bonds alone)."""
+    n = system.getNumParticles()
+    mask = np.zeros(n, bool)
+    for f in system.getForces():
+        if not isinstance(f, openmm.CustomNonbondedForce):
+            continue
+        if f.getNumInteractionGroups():
+            for g in range(f.getNumInteractionGroups()):
+                a, b = f.getInteractionGroupParameters(g)
+                mask[list(a)] = True
+                mask[list(b)] = True
+        elif f.getNumPerParticleParameters() and f.getPerParticleParameterName(0) == "on":
+            for k in range(n):
+                if f.getParticleParameters(k)[0] != 0.0:
+                    mask[k] = True
+        else:
+            mask[:] = True
+    return mask
+
+
 @dataclasses.dataclass
 class Pack:
     """R copies of a model in one System.
@@ -178,13 +203,17 @@ class Pack:
         The replicas' own models (indices 0 ... N-1), as built from their seeds.
     offsets : ndarray (R, 3), nm
     half_cell_nm : float
-        A copy's particles must stay within this x-y distance of its offset.
+        A copy's interacting particles must stay within this x-y distance of its offset.
+    interacting : ndarray of bool, shape (particles per copy,), or None
+        The particles :meth:`check_apart` watches (:func:`interacting_particles`; None:
+        all).
     """
 
     model: object
     members: list
     offsets: np.ndarray
     half_cell_nm: float
+    interacting: np.ndarray | None = None
 
     @property
     def n_per_copy(self) -> int:
@@ -205,8 +234,14 @@ class Pack:
                                                                       self.offsets)])
 
     def check_apart(self, split_positions: list) -> None:
-        """Raise :class:`PackError` when a copy has left its cell (copies could interact)."""
+        """Raise :class:`PackError` when a copy's interacting particles have left its cell
+        (copies could interact)."""
         for r, p in enumerate(split_positions):
+            p = np.asarray(p)
+            if self.interacting is not None:
+                p = p[self.interacting]
+            if not len(p):
+                continue
             reach = float(np.max(np.abs(p[:, :2])))
             if reach > self.half_cell_nm:
                 raise PackError(
@@ -255,4 +290,5 @@ def pack_models(members: list, *, spacing_nm: float | None = None,
                                                      zip(members, offsets)]),
         bonds=bonds)
     return Pack(model=packed, members=list(members), offsets=offsets,
-                half_cell_nm=0.5 * spacing - 0.5 * cut)
+                half_cell_nm=0.5 * spacing - 0.5 * cut,
+                interacting=interacting_particles(m0.system))

@@ -185,7 +185,7 @@ class Braid(TurnedScene):
         extra = [tuple(att), tuple(fixed)]
         if self.contact == "capsules":  # the strands meet through their segments only
             extra += [(int(i), int(j)) for i in chains[0] for j in chains[1]]
-        n_excl = kit.add_excluded_volume(extra)
+        n_excl = kit.add_excluded_volume(extra, dna_only=True)  # not the bead centre
         if self.contact == "capsules":
             kit.add_capsule_contact(chains)
         if self.surface:
