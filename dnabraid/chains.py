@@ -150,7 +150,8 @@ class Model:
     moves : dnabraid.run.moves.RigidMoves or None
         Metropolis moves the driver interleaves with the Brownian steps.
     exact_start : bool
-        True when ``positions`` is an exact draw of the equilibrium (not minimised).
+        True when ``positions`` is a thermal draw, or a start spread on purpose, that
+        minimising would undo: the run starts from it as it is.
     rings, ring_sides : list of int arrays
         Beads of each closed ring and the side particle of each of its bonds.
     bead_center : int or None

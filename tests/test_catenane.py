@@ -82,7 +82,11 @@ def test_single_ring_half_twist_variance_is_L_over_4pi2C(tmp_path, moves):
     s = make_scene("catenane", {"rings": 1, "length_nm": 48.0, "twist_persistence_nm": 50.0,
                                 "delta_lk": -1, "integrator": "lm", "steps": 48000,
                                 "equilibration_steps": 4000, "replicas": 1, "workers": 1,
-                                "frame_interval": 8000, "seed": 3, **moves})
+                                "frame_interval": 8000, "seed": 3, "start_spread": 0.0,
+                                **moves})
+    # the regular ring (start_spread = 0): this one replica's check of the variance was
+    # sized on it (sem 0.11 / 0.06 x theory); a spread start adds a bend relaxation that
+    # the 4000 equilibration steps do not remove (sem 0.18 x theory, seed 3)
     # (with the moves the twist's SEM is larger at equal steps: twice the steps keep the
     # check's power, sem < 0.15 x theory)
     summ = s.run(str(tmp_path / "ring"), threads=1)
@@ -252,3 +256,29 @@ def test_bad_input_names_the_key(over, words):
 def test_alpha_salt_resolves():
     s = make_scene("catenane", {"alpha": "salt"})
     assert s.alpha == pytest.approx(0.4)  # forcefields/chiral.toml at 1 M
+
+
+def test_single_ring_replicas_start_apart():
+    """rings = 1: every replica's start is the regular ring deformed by its own random
+    crankshafts: bond lengths exact (1e-9 nm), no two beads three or more apart along the
+    ring within the diameter, writhes that differ (sd > 0.02 turns over 8 seeds), and not
+    minimised; start_spread = 0 gives the same regular ring to every replica."""
+    from dnabraid.geometry.curves import writhe
+    wr = []
+    for seed in range(1, 9):
+        s = make_scene("catenane", {"rings": 1, "seed": seed})
+        m = s.build()
+        r = m.positions[m.rings[0]]
+        b = np.linalg.norm(np.roll(r, -1, axis=0) - r, axis=1)
+        assert np.allclose(b, s.bead_spacing_nm, atol=1e-9)
+        n = len(r)
+        d = np.linalg.norm(r[:, None] - r[None], axis=-1)
+        sep = np.abs(np.subtract.outer(np.arange(n), np.arange(n)))
+        assert np.all(d[np.minimum(sep, n - sep) >= 3] > s.effective_diameter_nm)
+        assert m.exact_start
+        wr.append(writhe(r))
+    assert np.std(wr) > 0.02, wr
+    flat = [make_scene("catenane", {"rings": 1, "seed": k, "start_spread": 0.0}).build()
+            for k in (1, 2)]
+    assert np.array_equal(flat[0].positions, flat[1].positions)
+    assert not flat[0].exact_start

@@ -116,6 +116,43 @@ def hopf_start(n: int, bead_spacing_nm: float, rings: int = 2, link: int = 1,
     return [r1, r2]
 
 
+def spread_ring(ring, min_dist_nm: float, angle_rad: float, rng, *, moves: int | None = None,
+                tries: int = 200) -> np.ndarray:
+    """A closed ring deformed by random crankshafts: ``moves`` (default: its bead count)
+    arcs of 2 ... n/3 beads, each turned about the line through its two neighbours by an
+    angle uniform in [-``angle_rad``, ``angle_rad``]; bond lengths are kept exactly, and a
+    turn that brings two beads three or more apart along the ring within ``min_dist_nm`` is
+    drawn again (at most ``tries`` times per move; then the ring keeps its last allowed
+    shape). The result is non-planar, with a writhe that differs from replica to replica:
+    starts that begin apart in the slowest coordinate, so that R-hat can see an unforgotten
+    start."""
+    x = np.array(ring, float, copy=True)
+    n = len(x)
+    sep = np.abs(np.subtract.outer(np.arange(n), np.arange(n)))
+    far = np.minimum(sep, n - sep) >= 3
+    for _ in range(n if moves is None else int(moves)):
+        for _ in range(tries):
+            m = int(rng.integers(2, max(3, n // 3) + 1))
+            i = int(rng.integers(n))
+            arc = (i + np.arange(m)) % n
+            a, b = x[(i - 1) % n], x[(i + m) % n]
+            ax = b - a
+            if np.linalg.norm(ax) < 1e-9:
+                continue
+            ax /= np.linalg.norm(ax)
+            th = angle_rad * (2.0 * rng.random() - 1.0)
+            v = x[arc] - a
+            par = np.outer(v @ ax, ax)
+            perp = v - par
+            y = x.copy()
+            y[arc] = a + par + perp * np.cos(th) + np.cross(ax, perp) * np.sin(th)
+            d = np.linalg.norm(y[:, None] - y[None], axis=-1)
+            if np.all(d[far] > min_dist_nm):
+                x = y
+                break
+    return x
+
+
 def ring_tw_wr(ring_pos, side_pos) -> tuple[np.ndarray, float, float]:
     """(joint twist angles omega_j (rad, seam included), Tw, Wr) of one framed ring (turns)."""
     om = ring_twist(ring_pos, side_pos, per_joint=True)
@@ -258,6 +295,13 @@ class Catenane(ThermalScene):
                      "apart); 'contact': ring 2's strand 1.3 diameters from ring 1's; 'mixed': "
                      "even replicas apart, odd ones in contact (starts far apart for the "
                      "between-replica convergence check)")
+    start_spread: float = key(1.0, "rad", "a single ring (rings = 1) starts from the regular ring "
+                              "deformed by its replica's own random crankshafts (largest "
+                              "angle start_spread; bond lengths kept, no beads closer than the "
+                              "diameter): replicas begin apart in shape and writhe, so that "
+                              "R-hat can see an unforgotten start. 0 = the regular ring for "
+                              "every replica (they share a start, and the verdict says so). "
+                              "Two rings start from the fixed Hopf geometry")
     rigid_moves: int = key(10, "", "Metropolis moves after every report interval, cycling a "
                            "relative shift of the rings, a turn of one ring about its centre "
                            "and a crankshaft turn of an arc (dnabraid.run.moves); 0 = Brownian "
@@ -346,6 +390,7 @@ class Catenane(ThermalScene):
         need(self.start in ("apart", "contact", "mixed"), "start",
              "allowed: 'apart', 'contact', 'mixed'")
         need(self.rigid_moves >= 0, "rigid_moves", "must be >= 0 (0 = none)")
+        need(0 <= self.start_spread <= math.pi, "start_spread", "must be in [0, pi] rad")
         need(self.move_shift_nm >= 0, "move_shift_nm", "must be >= 0")
         need(0 <= self.move_angle_rad <= math.pi, "move_angle_rad", "must be in [0, pi]")
         need(0 <= self.arc_angle_rad <= math.pi, "arc_angle_rad", "must be in [0, pi]")
@@ -382,6 +427,10 @@ class Catenane(ThermalScene):
         d = kit.dna
         gap = 1.3 * d.diameter_nm if self.start_of_replica == "contact" else None
         starts = hopf_start(self.n_beads, self.bead_spacing_nm, self.rings, self.link, gap)
+        if self.rings == 1 and self.start_spread > 0:
+            rng = np.random.default_rng([self.seed, 17])
+            starts = [spread_ring(starts[0], d.diameter_nm, self.start_spread, rng)]
+            kit.exact_start = True  # minimising would take it back to the circle
         rings = [kit.add_chain(p, "AB"[k], closed=True, fixed_first=False)
                  for k, p in enumerate(starts)]
         kit.add_stretch(self.stretch)
