@@ -282,3 +282,32 @@ def test_single_ring_replicas_start_apart():
             for k in (1, 2)]
     assert np.array_equal(flat[0].positions, flat[1].positions)
     assert not flat[0].exact_start
+
+
+@pytest.mark.parametrize("start", ["apart", "contact"])
+def test_linked_rings_start_apart_linked_and_as_built(start):
+    """Two rings: each replica deforms both by its own crankshafts, keeping Lk_12 (1e-9),
+    every bond length (1e-9 nm), and a contact start within half a bead step of its own
+    closest distance (1.3 diameters), an apart start above half of its (R); writhes
+    differ between seeds."""
+    gaps, wr = [], []
+    for seed in (1, 2, 3):
+        s = make_scene("catenane", {"seed": seed, "start": start})
+        m = s.build()
+        p = m.positions
+        r1, r2 = (p[r] for r in m.rings)
+        assert gauss_linking_number(r1, r2) == pytest.approx(s.link, abs=1e-9)
+        for r in (r1, r2):
+            b = np.linalg.norm(np.roll(r, -1, axis=0) - r, axis=1)
+            assert np.allclose(b, s.bead_spacing_nm, atol=1e-9)
+        gaps.append(np.linalg.norm(r1[:, None] - r2[None], axis=-1).min())
+        wr.append(writhe(r1))
+    fs = make_scene("catenane", {"start": start, "start_spread": 0.0})
+    flat, flat_b = fs.build(), fs.bead_spacing_nm
+    f1, f2 = (flat.positions[r] for r in flat.rings)
+    g0 = np.linalg.norm(f1[:, None] - f2[None], axis=-1).min()
+    if start == "contact":
+        assert all(g0 - 1e-9 <= g <= g0 + 0.5 * flat_b for g in gaps), (gaps, g0)
+    else:
+        assert all(g >= 0.5 * g0 for g in gaps), (gaps, g0)
+    assert np.ptp(wr) > 0.02, wr

@@ -117,7 +117,7 @@ def hopf_start(n: int, bead_spacing_nm: float, rings: int = 2, link: int = 1,
 
 
 def spread_ring(ring, min_dist_nm: float, angle_rad: float, rng, *, moves: int | None = None,
-                tries: int = 200) -> np.ndarray:
+                tries: int = 200, other=None, other_gap_nm: tuple | None = None) -> np.ndarray:
     """A closed ring deformed by random crankshafts: ``moves`` (default: its bead count)
     arcs of 2 ... n/3 beads, each turned about the line through its two neighbours by an
     angle uniform in [-``angle_rad``, ``angle_rad``]; bond lengths are kept exactly, and a
@@ -125,9 +125,14 @@ def spread_ring(ring, min_dist_nm: float, angle_rad: float, rng, *, moves: int |
     drawn again (at most ``tries`` times per move; then the ring keeps its last allowed
     shape). The result is non-planar, with a writhe that differs from replica to replica:
     starts that begin apart in the slowest coordinate, so that R-hat can see an unforgotten
-    start."""
+    start. With ``other`` (the linked ring's beads), a turn must also keep the Gauss
+    linking number of the two and their closest distance within ``other_gap_nm`` = (lo,
+    hi): the start stays linked, and apart or in contact as it was built."""
     x = np.array(ring, float, copy=True)
     n = len(x)
+    if other is not None:
+        other = np.asarray(other, float)
+        link = round(gauss_linking_number(x, other))
     sep = np.abs(np.subtract.outer(np.arange(n), np.arange(n)))
     far = np.minimum(sep, n - sep) >= 3
     for _ in range(n if moves is None else int(moves)):
@@ -147,9 +152,15 @@ def spread_ring(ring, min_dist_nm: float, angle_rad: float, rng, *, moves: int |
             y = x.copy()
             y[arc] = a + par + perp * np.cos(th) + np.cross(ax, perp) * np.sin(th)
             d = np.linalg.norm(y[:, None] - y[None], axis=-1)
-            if np.all(d[far] > min_dist_nm):
-                x = y
-                break
+            if not np.all(d[far] > min_dist_nm):
+                continue
+            if other is not None:
+                gap = np.linalg.norm(y[:, None] - other[None], axis=-1).min()
+                if not other_gap_nm[0] <= gap <= other_gap_nm[1] or \
+                        round(gauss_linking_number(y, other)) != link:
+                    continue
+            x = y
+            break
     return x
 
 
@@ -295,13 +306,13 @@ class Catenane(ThermalScene):
                      "apart); 'contact': ring 2's strand 1.3 diameters from ring 1's; 'mixed': "
                      "even replicas apart, odd ones in contact (starts far apart for the "
                      "between-replica convergence check)")
-    start_spread: float = key(1.0, "rad", "a single ring (rings = 1) starts from the regular ring "
-                              "deformed by its replica's own random crankshafts (largest "
-                              "angle start_spread; bond lengths kept, no beads closer than the "
-                              "diameter): replicas begin apart in shape and writhe, so that "
-                              "R-hat can see an unforgotten start. 0 = the regular ring for "
-                              "every replica (they share a start, and the verdict says so). "
-                              "Two rings start from the fixed Hopf geometry")
+    start_spread: float = key(1.0, "rad", "each replica's rings start from the regular ones "
+                              "('start') deformed by its own random crankshafts (largest angle "
+                              "start_spread; bond lengths kept, no beads closer than the "
+                              "diameter; two rings stay linked, and apart or in contact as "
+                              "built): replicas begin apart in shape and writhe, so that R-hat "
+                              "can see an unforgotten start. 0 = the regular rings for every "
+                              "replica (replicas then share starts, and the verdict says so)")
     rigid_moves: int = key(10, "", "Metropolis moves after every report interval, cycling a "
                            "relative shift of the rings, a turn of one ring about its centre "
                            "and a crankshaft turn of an arc (dnabraid.run.moves); 0 = Brownian "
@@ -427,10 +438,23 @@ class Catenane(ThermalScene):
         d = kit.dna
         gap = 1.3 * d.diameter_nm if self.start_of_replica == "contact" else None
         starts = hopf_start(self.n_beads, self.bead_spacing_nm, self.rings, self.link, gap)
-        if self.rings == 1 and self.start_spread > 0:
+        if self.start_spread > 0:
             rng = np.random.default_rng([self.seed, 17])
-            starts = [spread_ring(starts[0], d.diameter_nm, self.start_spread, rng)]
-            kit.exact_start = True  # minimising would take it back to the circle
+            if self.rings == 1:
+                starts = [spread_ring(starts[0], d.diameter_nm, self.start_spread, rng)]
+            else:
+                # each ring in turn, the other held; linked, and as apart or in contact as
+                # built: a contact start's closest distance kept within half a bead step
+                # of its own, an apart start's above half of its own (R)
+                g0 = float(np.linalg.norm(starts[0][:, None] - starts[1][None], axis=-1).min())
+                band = (g0, g0 + 0.5 * self.bead_spacing_nm) if gap is not None \
+                    else (0.5 * g0, np.inf)
+                r1 = spread_ring(starts[0], d.diameter_nm, self.start_spread, rng,
+                                 other=starts[1], other_gap_nm=band)
+                r2 = spread_ring(starts[1], d.diameter_nm, self.start_spread, rng,
+                                 other=r1, other_gap_nm=band)
+                starts = [r1, r2]
+            kit.exact_start = True  # minimising would take it back to the circles
         rings = [kit.add_chain(p, "AB"[k], closed=True, fixed_first=False)
                  for k, p in enumerate(starts)]
         kit.add_stretch(self.stretch)
