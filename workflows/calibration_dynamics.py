@@ -45,17 +45,20 @@ from dnabraid.analysis.calibration import calib_stats, z2_band
 
 HERE = pathlib.Path(__file__).resolve().parent
 
-#: (length nm, force pN, start force pN, mc_moves, steps)
+#: (length nm, force pN, start force pN, mc_moves, steps[, equilibration steps, default 0])
 CASES = ((600.0, 0.3, 3.0, 500, 40000), (600.0, 0.3, 0.03, 500, 40000),
          (600.0, 0.3, 3.0, 500, 8000), (300.0, 1.0, 10.0, 500, 8000),
-         (300.0, 1.0, 0.1, 500, 8000), (300.0, 1.0, 10.0, 0, 20000))
+         (300.0, 1.0, 0.1, 500, 8000), (300.0, 1.0, 10.0, 0, 20000),
+         # the first case with the tether's default equilibration (40000 steps) before
+         # the samples: the stretched start's memory must be gone
+         (600.0, 0.3, 3.0, 500, 40000, 40000))
 QUICK = ((600.0, 0.3, 3.0, 500, 4000), (300.0, 1.0, 0.1, 500, 2000))
 R = 4
 
 
-def scene_values(L, F, F0, moves, steps, seed) -> dict:
+def scene_values(L, F, F0, moves, steps, seed, eq=0) -> dict:
     return {"length_nm": L, "force_pN": F, "replicas": R, "workers": 1, "surface": False,
-            "self_avoidance": False, "steps": steps, "equilibration_steps": 0,
+            "self_avoidance": False, "steps": steps, "equilibration_steps": eq,
             "frame_interval": steps, "seed": seed, "mc_moves": moves, "start": "force",
             "start_force_pN": F0}
 
@@ -116,13 +119,14 @@ def _cell(c) -> str:
 
 
 def table(rows) -> list[str]:
-    out = ["| L nm | F pN | start drawn at pN | mc_moves | steps | exact <z> nm | K | "
+    out = ["| L nm | F pN | start drawn at pN | mc_moves | equilibration + steps | exact <z> nm | K | "
            "converged | converged: K, coverage (95% CI), <z^2> [band], bias nm | "
            "NOT CONVERGED: K, coverage, <z^2>, bias nm | wall / study s |",
            "|" + "---|" * 11]
     for r in rows:
         s = r["stats"]
-        out.append(f"| {r['L']:g} | {r['F']:g} | {r['F0']:g} | {r['moves']} | {r['steps']} | "
+        out.append(f"| {r['L']:g} | {r['F']:g} | {r['F0']:g} | {r['moves']} | "
+                   f"{r.get('eq', 0)} + {r['steps']} | "
                    f"{r['exact']:.2f} | {s['K']} | {s['n_converged'] / s['K']:.2f} | "
                    f"{_cell(s['converged'])} | {_cell(s['not_converged'])} | "
                    f"{s['wall_s']:.1f} |")
@@ -141,11 +145,13 @@ def main(argv=None) -> int:
     t_all = time.perf_counter()
     rows = []
     with cf.ProcessPoolExecutor(max_workers=a.jobs) as ex:
-        for ci, (L, F, F0, moves, steps) in enumerate(cases):
+        for ci, (L, F, F0, moves, steps, *eq) in enumerate(cases):
+            eq = eq[0] if eq else 0
             exact = exact_for(L, F)
-            vals = [scene_values(L, F, F0, moves, steps, 5000 + 100 * ci + k) for k in range(K)]
+            vals = [scene_values(L, F, F0, moves, steps, 5000 + 100 * ci + k, eq)
+                    for k in range(K)]
             studies = list(ex.map(one_study, vals))
-            rows.append({"L": L, "F": F, "F0": F0, "moves": moves, "steps": steps,
+            rows.append({"L": L, "F": F, "F0": F0, "moves": moves, "steps": steps, "eq": eq,
                          "exact": exact, "stats": summarise(studies, exact),
                          "studies": studies})
             print("\n".join(table(rows)[-1:]), flush=True)
@@ -163,7 +169,7 @@ def main(argv=None) -> int:
              f"Run {stamp} by `workflows/calibration_dynamics.py{' --quick' if a.quick else ''}"
              f" --studies {K} --jobs {a.jobs}`, {os.cpu_count()} cores; {wall / 60:.1f} min. "
              f"Each study: `tether` with replicas = {R}, surface = false, self_avoidance = "
-             "false, equilibration_steps = 0 (the cut is the data's), start = 'force' (each "
+             "false, equilibration_steps = 0 unless given (the cut is the data's), start = 'force' (each "
              "replica its own exact draw at the start force), default moves' amplitudes; "
              "exact value: `discrete_wlc_exact` of the same bead model.", "",
              *table(rows), "",
