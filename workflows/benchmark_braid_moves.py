@@ -76,7 +76,7 @@ def main(argv=None) -> int:
             f"seed={args.seed}; moves: mc_moves={args.moves} per report interval, "
             f"crank_angle_rad={s.crank_angle_rad}, bead_move_nm={s.bead_move_nm}, "
             f"shear_nm={s.shear_nm}, shear_z_nm={s.shear_z_nm}, twist_rad={s.twist_rad}, "
-            "kinds 4:4:1:1; wall = the whole run (all its points)"]
+            "kinds 4:4:0.5:0.5:1:2:1:2 (BraidMoves default); wall = the whole run (all its points)"]
     tmp = tempfile.mkdtemp(prefix="bench_braid_moves_")
     try:
         lines = head + runs(turn_sets, args.steps, args.eq, args.replicas, args.moves,
