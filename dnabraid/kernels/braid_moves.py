@@ -163,17 +163,6 @@ def _gauss(V1, lo1, hi1, V2, lo2, hi2):
 
 
 @numba.njit(cache=True)
-def _cat_part(pos, new, moved, use_new, b1, b2, lo1, hi1, lo2, hi2, ray):
-    """Gauss sum / 4 pi over segments lo1..hi1 of strand 1 and lo2..hi2 of strand 2 of the
-    ray-extended strands (segment e joins vertices e and e + 1)."""
-    V1 = np.empty((b1.shape[0] + 2, 3))
-    V2 = np.empty((b2.shape[0] + 2, 3))
-    _fill(pos, new, moved, use_new, b1, ray, V1)
-    _fill(pos, new, moved, use_new, b2, ray, V2)
-    return _gauss(V1, lo1, hi1, V2, lo2, hi2)
-
-
-@numba.njit(cache=True)
 def _seg_dist(p0, p1, q0, q1):
     """Closest distance of segments [p0, p1] and [q0, q1] (Ericson 2005, Sec. 5.1.9, as
     :func:`dnabraid.forces.segment_contact.segment_distance`)."""
@@ -291,7 +280,11 @@ def _extent(pos, b1, b2):
 @numba.njit(cache=True)
 def _catenation(pos, b1, b2, ray):
     moved = np.zeros(1, np.int64)
-    return _cat_part(pos, pos[:0], moved, False, b1, b2, 0, b1.shape[0], 0, b2.shape[0], ray)
+    V1 = np.empty((b1.shape[0] + 2, 3))
+    V2 = np.empty((b2.shape[0] + 2, 3))
+    _fill(pos, pos[:0], moved, False, b1, ray, V1)
+    _fill(pos, pos[:0], moved, False, b2, ray, V2)
+    return _gauss(V1, 0, b1.shape[0], V2, 0, b2.shape[0])
 
 
 def catenation(pos, strand1, strand2, ray_length: float | None = None) -> float:

@@ -350,7 +350,8 @@ def _total(pos, P, out):
         out[9] = _tw.twist_total(pos, P)
 
 
-#: Non-rigid moves of more particles than this take their WCA change from two sweeps.
+#: Moves of more particles than this (rigid or not) take their WCA change from two
+#: sweeps along z (:func:`_wca_sweep`).
 _SWEEP_MIN = 24
 
 
@@ -413,6 +414,10 @@ def delta_kernel(pos, idx, new, moved, rigid, P, H, out, thr, ncon, dcon, flip, 
     moved-unmoved pairs are searched from the unmoved side instead (cheaper when it is the
     smaller set): |R (p - c) - (q - c)| = |(p - c) - R^T (q - c)|, so the new pairs are the
     moved particles' old positions against the unmoved ones turned back by ``rinv`` = R^T.
+
+    Moves of more than ``_SWEEP_MIN`` particles take the WCA change as the difference of
+    the whole WCA energy after and before (:func:`_wca_sweep`; for a rigid move the moved
+    pairs cancel), without the early stop; ``flip`` is then not used.
     """
     for t in range(out.shape[0]):
         out[t] = 0.0
