@@ -123,7 +123,8 @@ def test_braid_moves_add_up_to_the_openmm_change_and_keep_the_topology(turns):
     mv = BraidMoves.for_model(m, moves_per_call=1, crank_angle_rad=2.5, bead_move_nm=0.4,
                               shear_nm=3.0, shear_z_nm=1.0, twist_rad=0.05, sway_rad=0.1,
                               pivot_rad=0.15, tilt_rad=0.1, stretch_eps=0.01,
-                              weights=(1.0,) * 8, seed=2)
+                              breathe_eps=0.1, breathe_max_beads=12,
+                              weights=(1.0,) * 9, seed=2)
     _set_angle(eng, mv.energy, turns)
     before = _openmm(eng, m, pos)
     new, terms = mv.run(pos, 8000)
@@ -214,7 +215,7 @@ def test_no_passage_sees_the_strand_passage_and_only_allows_what_the_gauss_sum_a
 
 
 def test_the_passage_pretest_changes_no_decision():
-    """Moves with and without the pre-test (same seed, all eight kinds, 4000 moves of the
+    """Moves with and without the pre-test (same seed, all nine kinds, 4000 moves of the
     100 nm braid at n = 1.5): the same positions to the last bit and the same counts: the
     pre-test only skips Gauss sums whose answer it knows."""
     sc = _scene()
@@ -225,7 +226,8 @@ def test_the_passage_pretest_changes_no_decision():
         mv = BraidMoves.for_model(m, moves_per_call=1, crank_angle_rad=2.5, bead_move_nm=0.4,
                                   shear_nm=3.0, shear_z_nm=1.0, twist_rad=0.05, sway_rad=0.1,
                                   pivot_rad=0.15, tilt_rad=0.1, stretch_eps=0.01,
-                                  crank_max_beads=20, weights=(1.0,) * 8, seed=5,
+                                  breathe_eps=0.1, crank_max_beads=20, weights=(1.0,) * 9,
+                                  seed=5,
                                   guard_every=0, passage_test=pt)
         mv.energy.set_trap_angle(2 * np.pi * 1.5)
         new, _ = mv.run(pos, 4000)
@@ -286,7 +288,8 @@ def test_every_braid_move_keeps_the_distribution_of_a_rigid_move_sampler():
     got = _small_braid_samples(turns, dict(crank_angle_rad=2.0, bead_move_nm=0.3,
                                            shear_nm=3.0, shear_z_nm=1.0, twist_rad=0.05,
                                            sway_rad=0.1, pivot_rad=0.15, tilt_rad=0.1,
-                                           stretch_eps=0.01, crank_max_beads=6),
+                                           stretch_eps=0.01, breathe_eps=0.1,
+                                           breathe_max_beads=6, crank_max_beads=6),
                                400, 1200, seed=8)
     se = np.hypot(blocking_sem(ref[:, 0])["sem"], blocking_sem(got[:, 0])["sem"])
     assert abs(ref[:, 0].mean() - got[:, 0].mean()) < 4 * se, (ref[:, 0].mean(),
@@ -295,3 +298,73 @@ def test_every_braid_move_keeps_the_distribution_of_a_rigid_move_sampler():
         assert abs(got[:, col].std() / ref[:, col].std() - 1) < 0.15, (
             col, got[:, col].std(), ref[:, col].std())
     assert np.all(np.abs(got[:, 3] - turns) < 0.25)
+
+
+def _breathe(pos, m, eps, u_w, u_k, wmax=40):
+    """One breathe proposal on ``pos``: (new positions or None if refused, log J)."""
+    from dnabraid.kernels.braid_moves import _breathe_proposal
+    b1, b2 = (np.asarray(c, np.int64) for c in m.chains)
+    c_ptr = np.array([0, len(b1), len(b1) + len(b2)], np.int64)
+    fixed = set(int(i) for i in m.fixed)
+    isf = np.array([int(i) in fixed for i in np.concatenate([b1, b2])], np.int64)
+    c_fixed = np.concatenate([[0], np.cumsum(isf)]).astype(np.int64)
+    n = len(pos)
+    new = np.zeros((n, 3))
+    idx = np.zeros(n, np.int64)
+    moved = np.zeros(n, np.int64)
+    lj = np.zeros(1)
+    k = _breathe_proposal(pos, b1, b2, c_ptr, c_fixed, wmax, eps, u_w, u_k, new, idx, moved,
+                          lj)
+    if k < 0:
+        return None, 0.0
+    out = pos.copy()
+    out[idx[:k]] = new[:k]
+    return out, float(lj[0])
+
+
+@pytest.mark.parametrize("turns", [0.0, 0.75])
+def test_breathe_move_keeps_bonds_is_undone_by_its_reverse_and_has_its_jacobian(turns):
+    """The breathe proposal (kernels.braid_moves, kind 8) on shaken braids: every strand
+    bond keeps its length to round-off; the reverse move (-eps, same window) returns the
+    positions to 1e-9 nm; the anchors do not move; and its log Jacobian equals log |det|
+    of the map's derivative by central differences (to 1e-5) over the coordinates it
+    changes (the strands' beads; the bead centre follows in the scene, not here)."""
+    sc = _scene()
+    m = sc.build()
+    rng = np.random.default_rng(3)
+    base = sc.start_positions(m, turns) + rng.normal(scale=0.3, size=(len(m.positions), 3))
+    a, b = (np.asarray(c) for c in m.chains)
+    for ch in m.chains:
+        base[ch[0]] = sc.start_positions(m, turns)[ch[0]]
+    bond = lambda p: np.r_[np.linalg.norm(np.diff(p[a], axis=0), axis=1),
+                           np.linalg.norm(np.diff(p[b], axis=0), axis=1)]
+    done = 0
+    for eps, uw, uk in ((0.08, 0.3, 0.5), (-0.06, 0.6, 0.2), (0.05, 0.0, 0.5)):
+        new, lj = _breathe(base, m, eps, uw, uk)
+        assert new is not None
+        assert np.allclose(bond(new), bond(base), atol=1e-9)
+        assert np.array_equal(new[[a[0], b[0]]], base[[a[0], b[0]]])
+        back, lj_back = _breathe(new, m, -eps, uw, uk)
+        assert np.allclose(back, base, atol=1e-9)
+        assert abs(lj + lj_back) < 1e-9
+        # numerical Jacobian over the strands' mobile coordinates
+        beads = np.r_[a[1:], b[1:]]
+        x0 = base[beads].ravel()
+
+        def f(x):
+            p = base.copy()
+            p[beads] = x.reshape(-1, 3)
+            q, _ = _breathe(p, m, eps, uw, uk)
+            return q[beads].ravel()
+
+        h = 1e-5
+        J = np.empty((len(x0), len(x0)))
+        for i in range(len(x0)):
+            e = np.zeros_like(x0)
+            e[i] = h
+            J[:, i] = (f(x0 + e) - f(x0 - e)) / (2 * h)
+        sign, logdet = np.linalg.slogdet(J)
+        assert sign > 0 and abs(logdet - lj) < 1e-5, (logdet, lj)
+        assert abs(lj) > 0.01  # the test would see a missing factor
+        done += 1
+    assert done == 3

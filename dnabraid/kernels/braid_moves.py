@@ -58,6 +58,22 @@ Kinds (rows of the statistics, in this order):
    displacement. The map is triangular with the constant Jacobian lambda^N mu^(2(N-1)) per
    strand of N mobile beads; the reverse move (1/lambda, 1/mu) is as likely, so the
    acceptance is min(1, J exp(-dE / kT)) (Metropolis-Hastings).
+8. ``breathe``: the braid's radius with its extension. The stretch move keeps the strands'
+   deviations from their own anchor-attachment lines in shape; a braid's radius, the
+   distance between its two strands, is a slower mode (the extension follows it with
+   correlation -0.57 on the long braid at n = 2) that crankshafts open only in many small
+   steps. A window of pairs k0 ... k0 + w (the two strands' beads of the same index; 2
+   <= w <= ``breathe_max``, k0 >= 1, k0 + w below the attachments) is opened about each
+   pair's midpoint: the horizontal half-difference of pair k is scaled by mu^t_k, t_k a
+   tent (0 at k0 and k0 + w, 1 in the middle), log mu uniform in [-``breathe_eps``,
+   ``breathe_eps``]. Every bond of the window keeps its length: its height u is replaced
+   by sign(u) sqrt(u^2 + h - h'), h and h' its squared horizontal extents before and after;
+   everything above the window (strand beads and attachments) shifts vertically by its
+   strand's change in height, the bead centre by the attachments' mean. The map is block
+   triangular (horizontal first, then heights given them) with Jacobian prod_k mu^(2 t_k)
+   prod_bonds |u / u'|, and the reverse move (1/mu, same window) undoes it exactly, so the
+   acceptance is min(1, J exp(-dE / kT)) (Metropolis-Hastings). A bond that would have to
+   lie flatter than horizontal refuses the move (its reverse never needs it).
 
 Topology: a move may pass one strand through the other, which the Brownian dynamics
 cannot (excluded volume). Every proposal that the Metropolis test would accept is checked,
@@ -98,7 +114,7 @@ __all__ = ["BRAID_KINDS", "catenation", "no_passage", "run_braid_moves"]
 
 #: Move kinds, in the order of :func:`run_braid_moves`' statistics rows.
 BRAID_KINDS = ("crankshaft", "bead", "shear", "twist", "sway", "pivot", "tilt",
-               "stretch")
+               "stretch", "breathe")
 
 
 # ------------------------------------------------------------------------------- catenation
@@ -329,6 +345,87 @@ def _near(V, cx, cy, cz, r2):
 
 # ------------------------------------------------------------------------------- the loop
 @numba.njit(cache=True)
+def _breathe_proposal(pos, b1, b2, c_ptr, c_fixed, wmax_beads, eps, u_w, u_k, new, idx,
+                      moved, logjac):
+    """The breathe move (module docstring, kind 8) into ``new``/``idx``/``moved``: returns
+    the number of moved particles and puts log J in ``logjac[0]``, or -(count + 1) when
+    the move is refused (the caller clears ``moved`` of the first count entries)."""
+    nmin = min(b1.shape[0], b2.shape[0])
+    wmax = min(wmax_beads, nmin - 3)
+    if wmax < 2:
+        return -1
+    w = 2 + int(u_w * (wmax - 1))
+    k0 = 1 + int(u_k * (nmin - 2 - w))
+    for c in range(2):
+        g0 = c_ptr[c]
+        if c_fixed[c_ptr[c + 1]] - c_fixed[g0 + k0] > 0:
+            return -1  # an immobile bead at or above the window
+    m = 0
+    lj = 0.0
+    # horizontal: the half-difference of pair k scaled by mu^t_k about the pair's midpoint
+    for k in range(k0 + 1, k0 + w):
+        tk = 1.0 - abs(2.0 * (k - k0) / w - 1.0)
+        f = math.exp(eps * tk)
+        p1 = b1[k]
+        p2 = b2[k]
+        for d in range(2):
+            c = 0.5 * (pos[p1, d] + pos[p2, d])
+            h = 0.5 * (pos[p1, d] - pos[p2, d])
+            new[m, d] = c + f * h
+            new[m + 1, d] = c - f * h
+        idx[m] = p1
+        idx[m + 1] = p2
+        moved[p1] = m + 1
+        moved[p2] = m + 2
+        m += 2
+        lj += 2.0 * eps * tk
+    # vertical: each bond of the window keeps its length (its height from the new
+    # horizontal extent, same sign); everything above shifts by the strand's change
+    for c in range(2):
+        bs = b1 if c == 0 else b2
+        nb = bs.shape[0]
+        zprev_old = pos[bs[k0], 2]
+        zprev_new = zprev_old
+        for j in range(k0, k0 + w):
+            pa = bs[j]
+            pb = bs[j + 1]
+            u = pos[pb, 2] - pos[pa, 2]
+            qa = moved[pa] - 1
+            qb = moved[pb] - 1
+            hx0 = pos[pb, 0] - pos[pa, 0]
+            hy0 = pos[pb, 1] - pos[pa, 1]
+            hx1 = (new[qb, 0] if qb >= 0 else pos[pb, 0]) - (new[qa, 0] if qa >= 0 else pos[pa, 0])
+            hy1 = (new[qb, 1] if qb >= 0 else pos[pb, 1]) - (new[qa, 1] if qa >= 0 else pos[pa, 1])
+            u2 = u * u + hx0 * hx0 + hy0 * hy0 - hx1 * hx1 - hy1 * hy1
+            if u == 0.0 or u2 <= 0.0:
+                return -(m + 1)
+            un = math.copysign(math.sqrt(u2), u)
+            lj += math.log(abs(u / un))
+            zprev_new += un
+            zprev_old += u
+            if qb < 0:  # bead k0 + w: horizontal position kept
+                new[m, 0] = pos[pb, 0]
+                new[m, 1] = pos[pb, 1]
+                idx[m] = pb
+                m += 1
+                moved[pb] = m
+                qb = m - 1
+            new[qb, 2] = zprev_new
+        shift = zprev_new - zprev_old
+        for k in range(k0 + w + 1, nb):
+            p = bs[k]
+            new[m, 0] = pos[p, 0]
+            new[m, 1] = pos[p, 1]
+            new[m, 2] = pos[p, 2] + shift
+            idx[m] = p
+            m += 1
+            moved[p] = m
+    logjac[0] = lj
+    return m
+
+
+
+@numba.njit(cache=True)
 def _line_rotation(pos, pa, pb, theta):
     """(ok, R): the rotation by ``theta`` about the line from particle pa to pb (not ok for
     coincident particles)."""
@@ -360,8 +457,8 @@ def _centre_follows(pos, new, idx, moved, m, center, att1, att2):
 @numba.njit(cache=True)
 def run_braid_moves(pos, P, c_ptr, c_beads, c_fixed, mobile, wgt, center, cum, crank_max,
                     crank_angle, bead_nm, shear_nm, shear_z_nm, twist_rad, sway_rad, pivot_rad,
-                    tilt_rad, stretch_eps, stretch_ratio, kT, uni, gau, stats, terms,
-                    passage_test=True):
+                    tilt_rad, stretch_eps, stretch_ratio, breathe_eps, breathe_max, kT, uni,
+                    gau, stats, terms, passage_test=True):
     """Metropolis crankshaft, bead, shear and twist moves of a braid on ``pos`` (modified
     in place; module docstring).
 
@@ -377,11 +474,15 @@ def run_braid_moves(pos, P, c_ptr, c_beads, c_fixed, mobile, wgt, center, cum, c
         Weights of shear and twist (0: not moved by them).
     center : int
         The bead centre (axis of the twist).
-    cum : float64 (8,)
+    cum : float64 (9,)
         Cumulative probabilities of the kinds (:data:`BRAID_KINDS`).
+    breathe_eps : float
+        Largest |log mu| of a breathe move.
+    breathe_max : int
+        Most pairs (window width) of a breathe move.
     kT : float
     uni : float64 (n, 6), gau : float64 (n, 3)
-    stats : int64 (8, 3)
+    stats : int64 (9, 3)
         Added to: attempted, refused (topology or degenerate), accepted per kind.
     terms : float64 (NTERMS,)
         Added to: the accepted energy change per term (pN nm).
@@ -412,6 +513,8 @@ def run_braid_moves(pos, P, c_ptr, c_beads, c_fixed, mobile, wgt, center, cum, c
     cat = _gauss(V1, 0, n1, V2, 0, n2)
     cat_ok = True  # False: a move was allowed by no_passage and ``cat`` is behind
     H, ncon, _, dcon, moved, idx, new, dterm = loop_setup(pos, P, terms.shape[0])
+    logjac = np.zeros(1)
+    logj = 0.0
     rinv = np.eye(3)
     cen = np.zeros(3)
     nmob = mobile.shape[0]
@@ -589,6 +692,17 @@ def run_braid_moves(pos, P, c_ptr, c_beads, c_fixed, mobile, wgt, center, cum, c
                     # z of N beads scaled; the attachment's xy kept, N - 1 deviations scaled
                     logj += nm * eps + 2.0 * (nm - 1) * (-stretch_ratio * eps)
                 m = _centre_follows(pos, new, idx, moved, m, center, b1[n1 - 1], b2[n2 - 1])
+            elif kind == 8:
+                m = _breathe_proposal(pos, b1, b2, c_ptr, c_fixed, breathe_max,
+                                      breathe_eps * (2.0 * uni[t, 2] - 1.0), uni[t, 3],
+                                      uni[t, 4], new, idx, moved, logjac)
+                if m < 0:
+                    for a in range(-m - 1):
+                        moved[idx[a]] = 0
+                    stats[kind, 1] += 1
+                    continue
+                logj = logjac[0]
+                m = _centre_follows(pos, new, idx, moved, m, center, b1[n1 - 1], b2[n2 - 1])
             else:
                 th = twist_rad * (2.0 * uni[t, 2] - 1.0)
                 cx = pos[center, 0]
@@ -607,11 +721,12 @@ def run_braid_moves(pos, P, c_ptr, c_beads, c_fixed, mobile, wgt, center, cum, c
                         m += 1
                         moved[p] = m
         thr = -kT * math.log(uni[t, 5]) if uni[t, 5] > 0.0 else np.inf
-        if kind == 7:
+        hastings = kind == 7 or kind == 8
+        if hastings:
             thr += kT * logj  # accept when dE < kT (log J - log u)
         dE = delta_kernel(pos, idx[:m], new[:m], moved, rigid, P, H, dterm, thr, ncon, dcon, False,
                     rinv, cen)
-        ok = math.isfinite(dE) and ((dE <= 0.0 and kind != 7) or dE < thr)
+        ok = math.isfinite(dE) and ((dE <= 0.0 and not hastings) or dE < thr)
         strands = kind != 6 and not (kind == 1 and ch < 0)
         if ok and strands:
             # topology: no strand may pass the other (the catenation may not jump)

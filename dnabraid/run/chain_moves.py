@@ -325,11 +325,16 @@ class BraidMoves(ChainMoves):
     stretch_ratio : float or None
         a in mu = lambda^-a; None: <b_z^2> / <b_xy^2> of the strands' bonds at the first
         call (clipped to [1, 100]), then fixed.
+    breathe_eps : float
+        Largest |log mu| of a breathe move (the braid opened about its pairs' midpoints,
+        bond lengths kept; 0 leaves it out).
+    breathe_max_beads : int
+        Most pairs in a breathe move's window (>= 2).
         Amplitudes (0 leaves a kind out; ``shear_z_nm`` 0 keeps the shear horizontal).
     crank_max_beads : int
-    weights : 8 floats
+    weights : 9 floats
         Relative probabilities of crankshaft, bead, shear, twist, sway, pivot, tilt,
-        stretch.
+        stretch, breathe.
     seed, guard_every, guard_rel, guard_abs_pN_nm
         As :class:`ChainMoves`'.
     passage_test : bool
@@ -344,8 +349,9 @@ class BraidMoves(ChainMoves):
                  shear_nm: float, shear_z_nm: float = 0.0, twist_rad: float = 0.0,
                  sway_rad: float = 0.0, pivot_rad: float = 0.0, tilt_rad: float = 0.0,
                  stretch_eps: float = 0.0, stretch_ratio: float | None = None,
+                 breathe_eps: float = 0.0, breathe_max_beads: int = 40,
                  crank_max_beads: int = 8,
-                 weights=(4.0, 4.0, 0.5, 0.5, 1.0, 2.0, 1.0, 2.0), seed: int = 1,
+                 weights=(4.0, 4.0, 0.5, 0.5, 1.0, 2.0, 1.0, 2.0, 2.0), seed: int = 1,
                  guard_every: int = 100, guard_rel: float = GUARD_REL,
                  guard_abs_pN_nm: float = GUARD_ABS_PN_NM, passage_test: bool = True):
         if moves_per_call < 1:
@@ -353,14 +359,14 @@ class BraidMoves(ChainMoves):
         self.passage_test = bool(passage_test)
         amps = (float(crank_angle_rad), float(bead_move_nm), float(shear_nm),
                 float(twist_rad), float(sway_rad), float(pivot_rad), float(tilt_rad),
-                float(stretch_eps))
+                float(stretch_eps), float(breathe_eps))
         if min(amps) < 0 or shear_z_nm < 0 or not any(a > 0 for a in amps):
             raise ValueError("move amplitudes must be >= 0, not all 0")
         if amps[0] > math.pi or max(amps[3:7]) > math.pi:
             raise ValueError("crank_angle_rad, twist_rad, sway_rad, pivot_rad and tilt_rad "
                              "must be <= pi")
-        if crank_max_beads < 1:
-            raise ValueError("crank_max_beads must be >= 1")
+        if crank_max_beads < 1 or breathe_max_beads < 2:
+            raise ValueError("crank_max_beads must be >= 1 and breathe_max_beads >= 2")
         chains = [np.asarray(c, np.int64) for c in chains]
         if len(chains) != 2 or any(len(c) < 2 for c in chains):
             raise ValueError("BraidMoves needs two strands of >= 2 beads")
@@ -369,7 +375,8 @@ class BraidMoves(ChainMoves):
         self.kT = float(kT_pN_nm)
         self.moves_per_call = int(moves_per_call)
         (self.crank_angle, self.bead_nm, self.shear_nm, self.twist_rad, self.sway_rad,
-         self.pivot_rad, self.tilt_rad, self.stretch_eps) = amps
+         self.pivot_rad, self.tilt_rad, self.stretch_eps, self.breathe_eps) = amps
+        self.breathe_max = int(breathe_max_beads)
         if stretch_ratio is not None and not stretch_ratio > 0:
             raise ValueError("stretch_ratio must be > 0")
         self.stretch_ratio = None if stretch_ratio is None else float(stretch_ratio)
@@ -432,7 +439,7 @@ class BraidMoves(ChainMoves):
                                      self.bead_nm, self.shear_nm, self.shear_z_nm,
                                      self.twist_rad, self.sway_rad, self.pivot_rad,
                                      self.tilt_rad, self.stretch_eps, self._ratio(pos),
-                                     self.kT, uni, gau,
+                                     self.breathe_eps, self.breathe_max, self.kT, uni, gau,
                                      self._stats, terms, self.passage_test)
         self.catenation = float(cat)
         self._tally(before, BRAID_KINDS)
@@ -456,6 +463,7 @@ class BraidMoves(ChainMoves):
                 "twist_rad": self.twist_rad, "sway_rad": self.sway_rad,
                 "pivot_rad": self.pivot_rad, "tilt_rad": self.tilt_rad,
                 "stretch_eps": self.stretch_eps, "stretch_ratio": self.stretch_ratio,
+                "breathe_eps": self.breathe_eps, "breathe_max_beads": self.breathe_max,
                 "crank_max_beads": self.crank_max,
                 "moves_per_call": self.moves_per_call, "guard_checks": self.guard_checks,
                 "guard_max_diff_pN_nm": self.guard_max_diff,

@@ -113,6 +113,11 @@ class Braid(TurnedScene):
                              "heights scaled by lambda and its deviations from the line "
                              "anchor-attachment by lambda^-a (the extension with the "
                              "strands' slack; Metropolis-Hastings)")
+    breathe_eps: float = key(0.1, "", "largest |log mu| of a breathe move: a window of the "
+                             "braid opened about its bead pairs' midpoints by mu (a tent "
+                             "profile), every bond's length kept, the top lowered with it "
+                             "(the braid's radius with the extension; Metropolis-Hastings)")
+    breathe_max_beads: int = key(40, "beads", "most bead pairs in a breathe move's window")
     crank_max_beads: int = key(40, "beads", "most beads of a crankshaft arc (arcs of the whole "
                                "strand turn its bow, the slowest mode of local moves)")
     mirror: str = key("off", "", "mirror-coupled pairs (variance reduction for handedness "
@@ -149,15 +154,17 @@ class Braid(TurnedScene):
         need(0 <= self.pivot_rad <= math.pi, "pivot_rad", "must be in [0, pi]")
         need(0 <= self.tilt_rad <= math.pi, "tilt_rad", "must be in [0, pi]")
         need(0 <= self.stretch_eps <= 0.5, "stretch_eps", "must be in [0, 0.5]")
+        need(0 <= self.breathe_eps <= 0.5, "breathe_eps", "must be in [0, 0.5]")
+        need(self.breathe_max_beads >= 2, "breathe_max_beads", "must be >= 2")
         need(self.crank_max_beads >= 1, "crank_max_beads", "must be >= 1")
         for k in ("bead_move_nm", "shear_nm", "shear_z_nm"):
             need(getattr(self, k) >= 0, k, "must be >= 0")
         if self.mc_moves > 0:
             need(max(self.crank_angle_rad, self.bead_move_nm, self.shear_nm,
                      self.twist_rad, self.sway_rad, self.pivot_rad, self.tilt_rad,
-                     self.stretch_eps) > 0,
+                     self.stretch_eps, self.breathe_eps) > 0,
                  "mc_moves", "needs a move: crank_angle_rad, bead_move_nm, shear_nm, "
-                 "twist_rad, sway_rad, pivot_rad, tilt_rad or stretch_eps > 0")
+                 "twist_rad, sway_rad, pivot_rad, tilt_rad, stretch_eps or breathe_eps > 0")
             need(self.alpha == 0.0, "mc_moves",
                  "the moves' local energies have no chiral term; set alpha=0 or mc_moves=0")
             need(self.stretch == "bonds", "mc_moves",
@@ -228,6 +235,8 @@ class Braid(TurnedScene):
                                    shear_z_nm=self.shear_z_nm, twist_rad=self.twist_rad,
                                    sway_rad=self.sway_rad, pivot_rad=self.pivot_rad,
                                    tilt_rad=self.tilt_rad, stretch_eps=self.stretch_eps,
+                                   breathe_eps=self.breathe_eps,
+                                   breathe_max_beads=self.breathe_max_beads,
                                    crank_max_beads=self.crank_max_beads, seed=self.seed)
         return {"bead_center": center, "zeta_center_pN_ns_per_nm": zeta_center,
                 "zeta_attach_pN_ns_per_nm": d.zeta_bead,
