@@ -112,12 +112,8 @@ class _GapProblem:
 
     def refine(self, xs, fs, i, gap_xatol):
         """The local minimum of the scan at grid index ``i``, refined (x, E)."""
-        if i == 0 or i == len(xs) - 1:
-            x0, f0 = float(xs[i]), float(fs[i])
-            lo, hi = (xs[0], xs[1]) if i == 0 else (xs[-2], xs[-1])
-        else:
-            x0, f0 = float(xs[i]), float(fs[i])
-            lo, hi = xs[i - 1], xs[i + 1]
+        x0, f0 = float(xs[i]), float(fs[i])
+        lo, hi = xs[max(i - 1, 0)], xs[min(i + 1, len(xs) - 1)]
         res = minimize_scalar(self.energy, bounds=(float(lo), float(hi)), method="bounded",
                               options={"xatol": gap_xatol, "maxiter": 200})
         # bounded Brent never evaluates the bounds: keep a grid point (x = 0) that is lower

@@ -81,24 +81,18 @@ def soft_pair(turns: float, alpha_pN: float, overrides: dict | None = None, *,
     """The soft-range continuum braid at +-|turns| (``solve_soft_tweezer``, D_c and the
     bead model's chiral weight), and what :func:`contact_tolerance_nm` needs: the bead
     spacing b (nm) and the capsule stiffness k (pN/nm)."""
-    from ..continuum.soft_tweezer import solve_soft_tweezer
+    from ..continuum.soft_tweezer import soft_handedness_asymmetry
 
     over = {**CAPSULE_BRAID, **(overrides or {})}
     s = make_scene("braid", {**over, "turns": [abs(turns)]})
     dna = s.dna()
-    out = {"contact_nm": s.effective_diameter_nm, "bead_spacing_nm": s.bead_spacing_nm,
-           "capsule_k_pN_per_nm": dna.wall_k}
-    for sign, tag in ((1, "plus"), (-1, "minus")):
-        out[tag] = solve_soft_tweezer(sign * abs(turns), s.force_pN, s.length_nm,
-                                      s.tether_separation_nm, s.effective_diameter_nm,
-                                      debye_nm=dna.debye_nm,
-                                      bending_pN_nm2=s.kT * s.persistence_nm,
-                                      alpha_pN=alpha_pN, branch=branch)
-    ok = out["plus"].success and out["minus"].success
-    out["success"] = ok
-    val = (lambda tag, key: out[tag][key] if ok else math.nan)
-    out["delta_z_nm"] = val("plus", "extension_nm") - val("minus", "extension_nm")
-    out["torque_sum_pN_nm"] = val("plus", "torque_pN_nm") + val("minus", "torque_pN_nm")
+    out = soft_handedness_asymmetry(abs(turns), s.force_pN, s.length_nm,
+                                    s.tether_separation_nm, s.effective_diameter_nm,
+                                    debye_nm=dna.debye_nm,
+                                    bending_pN_nm2=s.kT * s.persistence_nm,
+                                    alpha_pN=alpha_pN, branch=branch)
+    out.update({"contact_nm": s.effective_diameter_nm, "bead_spacing_nm": s.bead_spacing_nm,
+                "capsule_k_pN_per_nm": dna.wall_k})
     return out
 
 
