@@ -243,8 +243,9 @@ def test_braid_scene_keys():
     assert _scene().build().moves is None
     m = _scene(mc_moves=10).build()
     assert isinstance(m.moves, BraidMoves)
-    with pytest.raises(Exception, match="chiral"):
-        _scene(mc_moves=10, alpha=0.5)
+    # the chiral term has its compiled twin (tests/test_kernels_segments.py)
+    m = _scene(mc_moves=10, alpha=0.5, contact="capsules").build()
+    assert {"chiral", "capsule"} <= set(m.moves.energy.terms)
 
 
 def _small_braid_samples(turns, amps, moves, samples, seed=7):

@@ -22,11 +22,14 @@ model's ``openmm.System`` (its parameters converted from kJ/mol once, with
 * ``frame``, ``twist`` and the bead's plane ``beadwall`` of torsionally constrained DNA
   (the plectoneme: frame springs, twist joints and clamps,
   :mod:`dnabraid.forces.twist_frames`): twins in :mod:`dnabraid.kernels.twist`.
+* ``capsule`` (the segment contact between strands) and ``chiral`` (the Kornyshev term),
+  both ``openmm.PythonForce`` s: twins in :mod:`dnabraid.kernels.segments`, their
+  parameters read from the evaluator the force carries.
 
 A Force is recognised by its name and type and its energy expression is checked against
 the expression its factory writes, so a changed factory fails loudly here instead of
-silently differing. A System with any other Force (the chiral term, a changed factory)
-is refused: :class:`LocalEnergy` would not know its energy.
+silently differing. A System with any other Force (a changed factory, another Python
+callable) is refused: :class:`LocalEnergy` would not know its energy.
 
 Pairs within the WCA range are found with a spatial hash: a uniform grid of cells of
 :data:`CELL_FACTOR` x r_c = 2 r_c, so that the ball of radius r_c about a point touches
@@ -70,13 +73,14 @@ from ..forces import (
     wca_force,
 )
 from ..units import PN_NM_IN_KJ_MOL
+from . import segments as _sg
 from . import twist as _tw
 
 __all__ = ["LocalEnergy", "TERMS", "run_chain_moves"]
 
 #: The terms a :class:`LocalEnergy` knows, in the order of its term arrays.
 TERMS = ("stretch", "bend", "wca", "wall", "pull", "link", "trap", "beadwall", "frame",
-         "twist")
+         "twist", "capsule", "chiral")
 #: Number of terms (length of every per-term array).
 NTERMS = len(TERMS)
 
@@ -114,6 +118,14 @@ _Params = namedtuple("_Params", [
     "has_twist", "j_type", "j_p", "j_np", "j_g", "j_vec", "j_ptr", "j_list",
     # the bead's plane (beadwall of a plectoneme): attachment, per-particle bond count, k
     "has_plane", "pl_att", "pl_on", "pl_cnt", "pl_k",
+    # capsule contact between chains and the chiral term (dnabraid.kernels.segments):
+    # segments (global particle numbers), chain of each, D_c (nm), k (pN/nm); the chiral
+    # term's chain, position in chain, segments per chain, ring flag, exclusion along a
+    # chain, sample points q, weight (D_c, range, r_s, r_c in nm), N(eta') coefficients and
+    # alpha (pN)
+    "has_cap", "cap_seg", "cap_cid", "cap_D", "cap_k",
+    "has_chi", "chi_seg", "chi_cid", "chi_pic", "chi_nseg", "chi_ring", "chi_excl", "chi_q",
+    "chi_delta", "chi_rho", "chi_rs", "chi_rc", "chi_ncoef", "chi_alpha",
 ])
 
 _Hash = namedtuple("_Hash", ["head", "nxt", "key", "bucket", "inv_cell", "mask"])
@@ -348,6 +360,10 @@ def _total(pos, P, out):
         out[7] += _tw.plane_total(pos, P)
     if P.has_twist:
         out[9] = _tw.twist_total(pos, P)
+    if P.has_cap:
+        out[10] = _sg.capsule_total(pos, P)
+    if P.has_chi:
+        out[11] = _sg.chiral_total(pos, P)
 
 
 #: Moves of more particles than this (rigid or not) take their WCA change from two
@@ -474,6 +490,11 @@ def delta_kernel(pos, idx, new, moved, rigid, P, H, out, thr, ncon, dcon, flip, 
         j = P.t_j
         out[6] += _trap_at(pos, new, moved, P) - _trap_e(pos[i, 0], pos[i, 1], pos[i, 2],
                                                          pos[j, 0], pos[j, 1], pos[j, 2], P)
+    # the segment terms before the WCA: its early stop needs the rest of the change known
+    if P.has_cap:
+        out[10] += _sg.capsule_delta(pos, new, moved, rigid, P)
+    if P.has_chi:
+        out[11] += _sg.chiral_delta(pos, new, moved, rigid, P)
     if P.has_wca:
         if m > _SWEEP_MIN:
             # a large moved set: the whole WCA energy before and after, by sweeps along z
@@ -891,7 +912,7 @@ class LocalEnergy:
                  trap_kt=0.0, has_twist=False, j_type=z, j_p=np.zeros((0, 5), np.int64),
                  j_np=z, j_g=fz, j_vec=np.zeros((0, 6)), j_ptr=np.zeros(n + 1, np.int64),
                  j_list=z, has_plane=False, pl_att=0, pl_on=np.zeros(n, np.uint8),
-                 pl_cnt=np.zeros(n), pl_k=0.0)
+                 pl_cnt=np.zeros(n), pl_k=0.0, **_sg.segment_fields(n))
         present = []
         bonds = []  # (i, j, k, r0, term, one-sided) of stretch, link, beadwall, frame
         joints = []  # (type, particles, g, fixed vectors) of the twist forces
@@ -948,6 +969,10 @@ class LocalEnergy:
                 p.update(has_wall=bool(on.any()), wall_on=on,
                          wall_k=_global(f, f"{name}_k") / PN_NM_IN_KJ_MOL,
                          wall_z=_global(f, f"{name}_z"))
+            elif name == "capsule" and isinstance(f, openmm.PythonForce):
+                p.update(_sg.capsule_params(f))
+            elif name == "chiral" and isinstance(f, openmm.PythonForce):
+                p.update(_sg.chiral_params(f))
             elif name == "pull" and isinstance(f, openmm.CustomExternalForce):
                 _check_expr(f, pull_force([], [], 1.0, name=name).getEnergyFunction())
                 share = np.zeros(n)

@@ -13,6 +13,9 @@ import numpy as np
 from . import chain as _ch
 from .twist import joint_energy
 
+#: The index of the twist term in the per-term arrays (a compile-time constant).
+_I_TWIST = _ch.TERMS.index("twist")
+
 __all__ = ["passage_free", "run_twist_moves"]
 
 
@@ -150,7 +153,7 @@ def run_twist_moves(pos, P, beads, sides, morient, bnd, mobile, cum, crank_max, 
     nbd = beads.shape[0] - 1  # bonds N; attachment beads[N]
     att = beads[nbd]
     nmob = mobile.shape[0]
-    i_tw = terms.shape[0] - 1  # 'twist' is the last term, 'trap' is 6
+    i_tw = _I_TWIST  # the index of 'twist' in TERMS ('trap' is 6)
     H, ncon, n_on, dcon, moved, idx, new, dterm = _ch.loop_setup(pos, P, terms.shape[0])
     rinv = np.eye(3)
     center = np.zeros(3)

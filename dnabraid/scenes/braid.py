@@ -135,9 +135,6 @@ class Braid(TurnedScene):
         need = self.need
         need(self.mirror in MIRROR_MODES, "mirror", f"must be one of {MIRROR_MODES}")
         need(self.contact in CONTACT_MODES, "contact", f"must be one of {CONTACT_MODES}")
-        need(not (self.mc_moves > 0 and self.contact == "capsules"), "mc_moves",
-             "the compiled Metropolis moves cannot evaluate the capsule contact (nor the "
-             "chiral term); set mc_moves=0 with contact='capsules'")
         need(0.0 <= self.start_spread <= 1.0, "start_spread", "must be in [0, 1]")
         d = self.effective_diameter_nm
         need(self.tether_separation_nm >= d, "tether_separation_nm",
@@ -165,8 +162,6 @@ class Braid(TurnedScene):
                      self.stretch_eps, self.breathe_eps) > 0,
                  "mc_moves", "needs a move: crank_angle_rad, bead_move_nm, shear_nm, "
                  "twist_rad, sway_rad, pivot_rad, tilt_rad, stretch_eps or breathe_eps > 0")
-            need(self.alpha == 0.0, "mc_moves",
-                 "the moves' local energies have no chiral term; set alpha=0 or mc_moves=0")
             need(self.stretch == "bonds", "mc_moves",
                  "the Metropolis moves need stretch='bonds' (they change bond lengths); "
                  "set mc_moves=0 for rigid bonds")
