@@ -27,7 +27,7 @@ from .geometry.ribbon import plectoneme_summary, tether_twist, writhe_open
 from .units import TWO_PI
 
 __all__ = ["Column", "ObserveContext", "Observable", "Extension", "BeadAngle", "TrapTorque",
-           "Catenation", "TwistWrithe", "TwistTorque", "Plectonemes", "columns_of",
+           "Catenation", "StrandDistance", "TwistWrithe", "TwistTorque", "Plectonemes", "columns_of",
            "error_name"]
 
 
@@ -238,6 +238,40 @@ class Catenation(Observable):
                     f"{values['bead_angle_turns']:.3f} turns: the strands passed through each "
                     "other")
         return None
+
+
+class StrandDistance(Observable):
+    """The strands' distance in the middle of a braid and the chiral weight there.
+
+    For every segment of strand 1 whose beads lie in the middle half of the strand (bead
+    index in [N/4, 3N/4]), the closest distance d to any segment of strand 2 (capsules:
+    :func:`dnabraid.forces.segment_contact.segment_distance`); the columns are the mean of
+    d and of the chiral weight w(d) of ``kernel``
+    (:meth:`dnabraid.forces.reference_chiral.ChiralKernel.weight`, 1 at d <= D_c). The mean
+    weight is the factor by which thermal opening scales the contact's alpha
+    (issue "Chirality that agrees with its theory", item 4: the continuum x <w>).
+    """
+
+    def __init__(self, chains, kernel):
+        c0, c1 = (np.asarray(c, int) for c in chains)
+        n = len(c0)
+        lo, hi = n // 4, (3 * n) // 4
+        self.a0, self.a1 = c0[lo:hi], c0[lo + 1:hi + 1]
+        self.b0, self.b1 = c1[:-1], c1[1:]
+        self.kernel = kernel
+        self.columns = {
+            "axis_distance_nm": Column("nm", "mean closest distance from the middle half of "
+                                       "strand 1's segments to strand 2"),
+            "chiral_weight": Column("", "mean chiral weight w(d) over the same segments "
+                                    "(1 at contact)", digits=3)}
+
+    def __call__(self, pos, ctx, values):
+        from .forces.segment_contact import segment_distance
+
+        d = segment_distance(pos[self.a0][:, None], pos[self.a1][:, None],
+                             pos[self.b0][None], pos[self.b1][None])[0].min(axis=1)
+        w, _ = self.kernel.weight(d)
+        return {"axis_distance_nm": float(d.mean()), "chiral_weight": float(np.mean(w))}
 
 
 class TwistWrithe(Observable):

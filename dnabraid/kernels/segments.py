@@ -123,6 +123,43 @@ def _fill(pos, new, moved, i0, i1, j0, j1, after, x):
 
 
 @numba.njit(cache=True)
+def _ext_dist2(x):
+    """Squared closest distance of the two segments x[0:6], x[6:12], each extended by half
+    its length beyond both ends (t in [-1/2, 3/2]: the support of the chiral share psi), so
+    that no sample point of either is closer than this to the other's line within psi's
+    support (Ericson 2005, Sec. 5.1.9, as :func:`capsule_pair`)."""
+    u0 = x[3] - x[0]
+    u1 = x[4] - x[1]
+    u2 = x[5] - x[2]
+    v0 = x[9] - x[6]
+    v1 = x[10] - x[7]
+    v2 = x[11] - x[8]
+    w0 = x[0] - 0.5 * u0 - x[6] + 0.5 * v0
+    w1 = x[1] - 0.5 * u1 - x[7] + 0.5 * v1
+    w2 = x[2] - 0.5 * u2 - x[8] + 0.5 * v2
+    u0 *= 2.0
+    u1 *= 2.0
+    u2 *= 2.0
+    v0 *= 2.0
+    v1 *= 2.0
+    v2 *= 2.0
+    aa = u0 * u0 + u1 * u1 + u2 * u2
+    ee = v0 * v0 + v1 * v1 + v2 * v2
+    bb = u0 * v0 + u1 * v1 + u2 * v2
+    cc = u0 * w0 + u1 * w1 + u2 * w2
+    ff = v0 * w0 + v1 * w1 + v2 * w2
+    den = aa * ee - bb * bb
+    s = (bb * ff - cc * ee) / den if den > 1e-14 * aa * ee else 0.0
+    s = min(1.0, max(0.0, s))
+    t = min(1.0, max(0.0, (bb * s + ff) / ee)) if ee > 1e-300 else 0.0
+    s = min(1.0, max(0.0, (bb * t - cc) / aa)) if aa > 1e-300 else 0.0
+    r0 = w0 + s * u0 - t * v0
+    r1 = w1 + s * u1 - t * v1
+    r2 = w2 + s * u2 - t * v2
+    return r0 * r0 + r1 * r1 + r2 * r2
+
+
+@numba.njit(cache=True)
 def capsule_pair(x, D, k):
     """k/2 (D - d)^2 for d < D (pN nm), d the closest distance of segments x[0:6], x[6:12]."""
     u0 = x[3] - x[0]
@@ -383,7 +420,7 @@ def _term_delta(pos, new, moved, rigid, S, cid, pic, nseg, ring, excl, which, cu
                 _fill(pos, new, moved, S[u, 0], S[u, 1], S[v, 0], S[v, 1], after, x)
                 if which == 0:
                     de += sign * capsule_pair(x, cut, k)
-                else:
+                elif _ext_dist2(x) < cut * cut:
                     de += sign * chiral_pair(x, q, delta, rho, r_s, cut, ncoef)
     return de
 

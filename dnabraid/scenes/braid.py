@@ -51,10 +51,11 @@ MAX_START_DRAWS = 200
 LONG_BRAID = {"length_nm": 200.0, "force_pN": 2.0, "timestep_safety": 0.3}
 
 MC_MOVES_HELP = ("Metropolis moves after every report interval (crankshaft, bead, shear, twist, "
-                 "sway, pivot, tilt, stretch 4:4:0.5:0.5:1:2:1:2; "
+                 "sway, pivot, tilt, stretch, breathe 4:4:0.5:0.5:1:2:1:2:2; "
                  "dnabraid.run.chain_moves.BraidMoves): the same equilibrium, sampled "
-                 "faster (workflows/results/benchmark_braid_moves.txt). 0 = Brownian dynamics "
-                 "alone (physical kinetics). Needs alpha = 0 and stretch = 'bonds'")
+                 "faster (workflows/results/benchmark_braid_moves.txt); their local energies carry "
+                 "every term, the capsule contact and the chiral term included. 0 = Brownian "
+                 "dynamics alone (physical kinetics). Needs stretch = 'bonds'")
 
 
 @dataclasses.dataclass(frozen=True)
@@ -369,7 +370,18 @@ class Braid(TurnedScene):
         return [ob.Extension(att),
                 ob.BeadAngle((att[0], att[1]), self.trap_stiffness_pN_nm, self.turn_rate),
                 ob.TrapTorque(self.trap_stiffness_pN_nm), ob.Catenation(model.chains)] \
-            + self.strand_torque(model)
+            + self.strand_torque(model) + self.strand_distance(model)
+
+    def strand_distance(self, model) -> list:
+        """With the capsule contact: the strands' distance in the braid's middle and the
+        mean chiral weight there (:class:`dnabraid.observables.StrandDistance`; the weight
+        of the contact distance D_c, the capsules' own)."""
+        if self.contact != "capsules":
+            return []
+        from ..forces.reference_chiral import ChiralKernel
+
+        d = model.dna
+        return [ob.StrandDistance(model.chains, ChiralKernel(d.diameter_nm, d.debye_nm))]
 
     def strand_torque(self, model) -> list:
         """The strands' torque on the top (:class:`dnabraid.observables.StrandTorque`, the
