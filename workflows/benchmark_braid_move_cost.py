@@ -9,8 +9,12 @@ differ only in time. Printed and written: us per attempted move for each variant
 ratio, acceptance and the number refused by the topology check, and the mixture's mean
 cost at the scene's kind weights.
 
+With ``--segments``: instead of the pre-test comparison, each kind's cost with the bead
+WCA between the strands, with the capsule contact, and with the capsule contact and the
+chiral term (alpha = ``--alpha``; dnabraid.kernels.segments), the three interleaved per kind.
+
 Usage: python workflows/benchmark_braid_move_cost.py [--turns 0 2] [--moves 20000]
-       [--repeats 3]
+       [--repeats 3] [--segments [--alpha 2]]
 Writes workflows/results/benchmark_braid_move_cost.txt (appends).
 """
 
@@ -29,14 +33,15 @@ from dnabraid.scenes import make_scene
 from dnabraid.scenes.braid import LONG_BRAID
 
 HERE = pathlib.Path(__file__).resolve().parent
-WEIGHTS = (4.0, 4.0, 0.5, 0.5, 1.0, 2.0, 1.0, 2.0)  # BraidMoves' default mixture
+WEIGHTS = (4.0, 4.0, 0.5, 0.5, 1.0, 2.0, 1.0, 2.0, 2.0)  # BraidMoves' default mixture
 
 
 def _amps(sc) -> dict:
     return dict(crank_angle_rad=sc.crank_angle_rad, bead_move_nm=sc.bead_move_nm,
                 shear_nm=sc.shear_nm, shear_z_nm=sc.shear_z_nm, twist_rad=sc.twist_rad,
                 sway_rad=sc.sway_rad, pivot_rad=sc.pivot_rad, tilt_rad=sc.tilt_rad,
-                stretch_eps=sc.stretch_eps, crank_max_beads=sc.crank_max_beads)
+                stretch_eps=sc.stretch_eps, breathe_eps=sc.breathe_eps,
+                breathe_max_beads=sc.breathe_max_beads, crank_max_beads=sc.crank_max_beads)
 
 
 def table(turns: float, moves: int, repeats: int) -> list[str]:
@@ -51,7 +56,7 @@ def table(turns: float, moves: int, repeats: int) -> list[str]:
              f"{'ratio':>6} {'acceptance':>10} {'refused':>8}"]
     cost = {True: 0.0, False: 0.0}
     for k, name in enumerate(BRAID_KINDS):
-        w = [0.0] * 8
+        w = [0.0] * len(BRAID_KINDS)
         w[k] = 1.0
         best = {True: np.inf, False: np.inf}
         stats = None
@@ -75,11 +80,57 @@ def table(turns: float, moves: int, repeats: int) -> list[str]:
     return lines
 
 
+def segments_table(turns: float, moves: int, repeats: int, alpha: float) -> list[str]:
+    """Per kind: us per move with the bead WCA, the capsules, the capsules + chiral term."""
+    variants = {"beads": {}, "capsules": {"contact": "capsules"},
+                f"capsules+chiral {alpha:g} pN": {"contact": "capsules", "alpha": alpha}}
+    built = {}
+    for name, kw in variants.items():
+        sc = make_scene("braid", dict(LONG_BRAID, turns=[turns], replicas=1, **kw))
+        m = sc.build()
+        pos = np.array(sc.start_positions(m, turns), float)
+        mv = BraidMoves.for_model(m, moves_per_call=2000, seed=1, guard_every=0, **_amps(sc))
+        mv.energy.set_trap_angle(2 * np.pi * turns)
+        for _ in range(50):
+            pos, _ = mv.run(pos)
+        built[name] = (sc, m, pos, mv.energy)
+    names = list(variants)
+    lines = [f"turns {turns:g}: {'kind':>10} " + " ".join(f"{n:>24}" for n in names)
+             + "  (us per move; acceptance)"]
+    cost = dict.fromkeys(names, 0.0)
+    for k, kind in enumerate(BRAID_KINDS):
+        w = [0.0] * len(BRAID_KINDS)
+        w[k] = 1.0
+        best = dict.fromkeys(names, np.inf)
+        acc = {}
+        for _ in range(repeats):
+            for name in names:
+                sc, m, pos, le = built[name]
+                mk = BraidMoves(le, m.chains, m.fixed, m.bead_center, m.dna.kT,
+                                moves_per_call=moves, seed=2, guard_every=0, weights=w,
+                                **_amps(sc))
+                mk.run(pos.copy(), 200)
+                t0 = time.perf_counter()
+                mk.run(pos.copy(), moves)
+                best[name] = min(best[name], (time.perf_counter() - t0) / moves * 1e6)
+                acc[name] = mk.stats[kind].to_dict()["acceptance"]
+        for name in names:
+            cost[name] += WEIGHTS[k] * best[name] / sum(WEIGHTS)
+        lines.append(f"{'':8}{kind:>10} " + " ".join(f"{best[n]:17.1f} ({acc[n]:.2f})"
+                                                     for n in names))
+    lines.append(f"{'':8}{'mixture':>10} " + " ".join(f"{cost[n]:24.1f}" for n in names)
+                 + f"   (kind weights {WEIGHTS})")
+    return lines
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--turns", type=float, nargs="+", default=[0.0, 2.0])
     ap.add_argument("--moves", type=int, default=20000)
     ap.add_argument("--repeats", type=int, default=3, help="best of this many timings")
+    ap.add_argument("--segments", action="store_true",
+                    help="compare bead WCA, capsules, capsules + chiral term instead")
+    ap.add_argument("--alpha", type=float, default=2.0, help="alpha of --segments (pN)")
     ap.add_argument("--out", default=str(HERE / "results" / "benchmark_braid_move_cost.txt"))
     a = ap.parse_args(argv)
     stamp = datetime.datetime.now().strftime("%Y-%m-%d %H:%M")
@@ -89,7 +140,8 @@ def main(argv=None) -> int:
     print(head[0], flush=True)
     lines = list(head)
     for n in a.turns:
-        t = table(n, a.moves, a.repeats)
+        t = (segments_table(n, a.moves, a.repeats, a.alpha) if a.segments
+             else table(n, a.moves, a.repeats))
         print("\n".join(t), flush=True)
         lines += t
     out = pathlib.Path(a.out)
