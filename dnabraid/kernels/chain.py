@@ -451,9 +451,15 @@ def delta_kernel(pos, idx, new, moved, rigid, P, H, out, thr, ncon, dcon, flip, 
                     continue
                 e0 = _bond_e(pos[i, 0], pos[i, 1], pos[i, 2], pos[j, 0], pos[j, 1],
                              pos[j, 2], P.b_k[b], P.b_r0[b], P.b_one[b])
-                e1 = _bond_e(_at(pos, new, moved, i, 0), _at(pos, new, moved, i, 1),
-                             _at(pos, new, moved, i, 2), _at(pos, new, moved, j, 0),
-                             _at(pos, new, moved, j, 1), _at(pos, new, moved, j, 2),
+                # the new coordinates written out (through _at, 6 calls of ~20 ns each)
+                si = moved[i] - 1
+                sj = moved[j] - 1
+                e1 = _bond_e(new[si, 0] if si >= 0 else pos[i, 0],
+                             new[si, 1] if si >= 0 else pos[i, 1],
+                             new[si, 2] if si >= 0 else pos[i, 2],
+                             new[sj, 0] if sj >= 0 else pos[j, 0],
+                             new[sj, 1] if sj >= 0 else pos[j, 1],
+                             new[sj, 2] if sj >= 0 else pos[j, 2],
                              P.b_k[b], P.b_r0[b], P.b_one[b])
                 out[P.b_t[b]] += e1 - e0
         if P.has_bend:
@@ -470,11 +476,18 @@ def delta_kernel(pos, idx, new, moved, rigid, P, H, out, thr, ncon, dcon, flip, 
                     continue
                 e0 = _bend_e(pos[i, 0], pos[i, 1], pos[i, 2], pos[j, 0], pos[j, 1],
                              pos[j, 2], pos[k, 0], pos[k, 1], pos[k, 2], P.kappa)
-                e1 = _bend_e(_at(pos, new, moved, i, 0), _at(pos, new, moved, i, 1),
-                             _at(pos, new, moved, i, 2), _at(pos, new, moved, j, 0),
-                             _at(pos, new, moved, j, 1), _at(pos, new, moved, j, 2),
-                             _at(pos, new, moved, k, 0), _at(pos, new, moved, k, 1),
-                             _at(pos, new, moved, k, 2), P.kappa)
+                si = moved[i] - 1
+                sj = moved[j] - 1
+                sk = moved[k] - 1
+                e1 = _bend_e(new[si, 0] if si >= 0 else pos[i, 0],
+                             new[si, 1] if si >= 0 else pos[i, 1],
+                             new[si, 2] if si >= 0 else pos[i, 2],
+                             new[sj, 0] if sj >= 0 else pos[j, 0],
+                             new[sj, 1] if sj >= 0 else pos[j, 1],
+                             new[sj, 2] if sj >= 0 else pos[j, 2],
+                             new[sk, 0] if sk >= 0 else pos[k, 0],
+                             new[sk, 1] if sk >= 0 else pos[k, 1],
+                             new[sk, 2] if sk >= 0 else pos[k, 2], P.kappa)
                 out[1] += e1 - e0
         if P.has_wall and P.wall_on[p]:
             out[3] += _wall_e(new[a, 2], P) - _wall_e(pos[p, 2], P)
