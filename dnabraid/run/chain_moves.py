@@ -53,7 +53,8 @@ from ..kernels.braid_moves import BRAID_KINDS, run_braid_moves
 from ..kernels.chain import NTERMS, TERMS, LocalEnergy, run_chain_moves
 from .moves import MoveStats
 
-__all__ = ["BraidMoves", "ChainMoves", "KINDS", "BRAID_KINDS", "GUARD_REL", "GUARD_ABS_PN_NM"]
+__all__ = ["BraidMoves", "ChainMoves", "KINDS", "BRAID_KINDS", "GUARD_REL", "GUARD_ABS_PN_NM",
+           "MIRRORED_UNIFORMS", "mirror_random"]
 
 #: Move kinds, in the order of the compiled loop's statistics rows.
 KINDS = ("crankshaft", "pivot", "bead")
@@ -70,6 +71,27 @@ KINDS = ("crankshaft", "pivot", "bead")
 GUARD_REL = 1e-6
 #: Guard tolerance, absolute part (pN nm).
 GUARD_ABS_PN_NM = 1e-3
+
+
+#: Per braid move kind, the columns of its uniforms that carry a sign under the y -> -y
+#: mirror (u -> 1 - u): the crankshaft's angle, the shear's azimuth, the twist's angle, the
+#: sway's angle and azimuth, the pivot's and the tilt's angles (the bead move's Gaussian y
+#: is negated). tests/test_braid_mirror_moves.py checks that a chain fed these from the
+#: mirrored start is the mirror of the original, move by move.
+MIRRORED_UNIFORMS = {0: (4,), 2: (3,), 3: (2,), 4: (2, 3), 5: (2,), 6: (2,)}
+
+
+def mirror_random(cum, uni: np.ndarray, gau: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The random numbers of the braid moves' y -> -y mirror (:data:`MIRRORED_UNIFORMS`),
+    as new arrays; ``cum`` the kinds' cumulative weights (the kind of each proposal)."""
+    uni = uni.copy()
+    gau = gau.copy()
+    kind = np.minimum(np.searchsorted(cum, uni[:, 0], side="right"), len(BRAID_KINDS) - 1)
+    for k, cols in MIRRORED_UNIFORMS.items():
+        for c in cols:
+            uni[kind == k, c] = 1.0 - uni[kind == k, c]
+    gau[kind == 1, 1] *= -1.0
+    return uni, gau
 
 
 def kind_weights(weights, amps, guard_every: int) -> np.ndarray:
@@ -342,6 +364,10 @@ class BraidMoves(ChainMoves):
         can (no segment can meet the other strand on the straight path between the two
         states), the Gauss sums only where it cannot; False: the Gauss sums always (the
         same equilibrium; for benchmarks).
+    mirror : bool
+        Draw the y -> -y mirror of the random numbers (:func:`mirror_random`): the image
+        of a mirror-coupled pair (scene key ``mirror = "image"``), whose moves then mirror
+        the original's, move by move, as its Brownian noise does.
     """
 
     def __init__(self, energy, chains, fixed, center: int, kT_pN_nm: float, *,
@@ -353,10 +379,12 @@ class BraidMoves(ChainMoves):
                  crank_max_beads: int = 8,
                  weights=(4.0, 4.0, 0.5, 0.5, 1.0, 2.0, 1.0, 2.0, 2.0), seed: int = 1,
                  guard_every: int = 100, guard_rel: float = GUARD_REL,
-                 guard_abs_pN_nm: float = GUARD_ABS_PN_NM, passage_test: bool = True):
+                 guard_abs_pN_nm: float = GUARD_ABS_PN_NM, passage_test: bool = True,
+                 mirror: bool = False):
         if moves_per_call < 1:
             raise ValueError("moves_per_call must be >= 1")
         self.passage_test = bool(passage_test)
+        self.mirror = bool(mirror)
         amps = (float(crank_angle_rad), float(bead_move_nm), float(shear_nm),
                 float(twist_rad), float(sway_rad), float(pivot_rad), float(tilt_rad),
                 float(stretch_eps), float(breathe_eps))
@@ -431,6 +459,8 @@ class BraidMoves(ChainMoves):
             self._wgt = wgt
         uni = self.rng.random((n, 6))
         gau = self.rng.standard_normal((n, 3))
+        if self.mirror:
+            uni, gau = mirror_random(self._cum, uni, gau)
         before = self._stats.copy()
         terms = np.zeros(NTERMS)
         absum, cat = run_braid_moves(pos, le.params, self._c_ptr, self._c_beads,

@@ -233,7 +233,8 @@ class Braid(TurnedScene):
                                    tilt_rad=self.tilt_rad, stretch_eps=self.stretch_eps,
                                    breathe_eps=self.breathe_eps,
                                    breathe_max_beads=self.breathe_max_beads,
-                                   crank_max_beads=self.crank_max_beads, seed=self.seed)
+                                   crank_max_beads=self.crank_max_beads, seed=self.seed,
+                                   mirror=self.mirror == "image")
         return {"bead_center": center, "zeta_center_pN_ns_per_nm": zeta_center,
                 "zeta_attach_pN_ns_per_nm": d.zeta_bead,
                 "zeta_bead_physical_pN_ns_per_nm": zeta_phys,
