@@ -241,37 +241,46 @@ class Catenation(Observable):
 
 
 class StrandDistance(Observable):
-    """The strands' distance in the middle of a braid and the chiral weight there.
+    """The strands' distance in the ply of a braid, the ply's length and its chiral weight.
 
-    For every segment of strand 1 whose beads lie in the middle half of the strand (bead
-    index in [N/4, 3N/4]), the closest distance d to any segment of strand 2 (capsules:
-    :func:`dnabraid.forces.segment_contact.segment_distance`); the columns are the mean of
-    d and of the chiral weight w(d) of ``kernel``
+    For every segment of strand 1, the closest distance d to any segment of strand 2
+    (capsules: :func:`dnabraid.forces.segment_contact.segment_distance`). The ply is the set
+    of segments with d < ``ply_factor`` x D_c (D_c the contact distance of ``kernel``; the
+    legs splay to the tether separation); columns: its length (the segments' contour), the
+    mean of d over it and the mean chiral weight w(d) over it
     (:meth:`dnabraid.forces.reference_chiral.ChiralKernel.weight`, 1 at d <= D_c). The mean
-    weight is the factor by which thermal opening scales the contact's alpha
-    (issue "Chirality that agrees with its theory", item 4: the continuum x <w>).
+    weight is the factor by which thermal opening scales the contact's alpha (issue
+    "Chirality that agrees with its theory", item 4: the continuum x <w>). Without a ply
+    (strands apart) d is the closest approach and the weight 0.
     """
 
-    def __init__(self, chains, kernel):
+    def __init__(self, chains, kernel, ply_factor: float = 2.0):
         c0, c1 = (np.asarray(c, int) for c in chains)
-        n = len(c0)
-        lo, hi = n // 4, (3 * n) // 4
-        self.a0, self.a1 = c0[lo:hi], c0[lo + 1:hi + 1]
+        self.a0, self.a1 = c0[:-1], c0[1:]
         self.b0, self.b1 = c1[:-1], c1[1:]
         self.kernel = kernel
+        self.cut = float(ply_factor) * kernel.delta
         self.columns = {
-            "axis_distance_nm": Column("nm", "mean closest distance from the middle half of "
-                                       "strand 1's segments to strand 2"),
-            "chiral_weight": Column("", "mean chiral weight w(d) over the same segments "
-                                    "(1 at contact)", digits=3)}
+            "ply_length_nm": Column("nm", f"contour of strand 1 closer than {ply_factor:g} D_c "
+                                    "to strand 2 (the ply)"),
+            "axis_distance_nm": Column("nm", "mean closest distance from strand 1's ply "
+                                       "segments to strand 2"),
+            "chiral_weight": Column("", "mean chiral weight w(d) over the ply (1 at contact)",
+                                    digits=3)}
 
     def __call__(self, pos, ctx, values):
         from .forces.segment_contact import segment_distance
 
         d = segment_distance(pos[self.a0][:, None], pos[self.a1][:, None],
                              pos[self.b0][None], pos[self.b1][None])[0].min(axis=1)
-        w, _ = self.kernel.weight(d)
-        return {"axis_distance_nm": float(d.mean()), "chiral_weight": float(np.mean(w))}
+        ply = d < self.cut
+        if not ply.any():
+            return {"ply_length_nm": 0.0, "axis_distance_nm": float(d.min()),
+                    "chiral_weight": 0.0}
+        w, _ = self.kernel.weight(d[ply])
+        lengths = np.linalg.norm(pos[self.a1] - pos[self.a0], axis=1)
+        return {"ply_length_nm": float(lengths[ply].sum()),
+                "axis_distance_nm": float(d[ply].mean()), "chiral_weight": float(np.mean(w))}
 
 
 class TwistWrithe(Observable):

@@ -7,8 +7,8 @@ replicas), Brownian dynamics interleaved with the compiled Metropolis moves, whi
 carry the capsule contact and the chiral term (dnabraid.kernels.segments). Reported per
 alpha: z(+n) - z(-n) and Gamma(+n) + Gamma(-n) with their standard errors (the two
 points' across-replica errors in quadrature), the convergence verdicts, the strands'
-distance in the braid's middle and the mean chiral weight <w(d)> at each hand
-(observable ``StrandDistance``), and three continuum columns:
+distance and the mean chiral weight <w(d)> over the ply (strand 1's segments closer
+than 2 D_c to strand 2) at each hand, and the ply's length (observable ``StrandDistance``), and three continuum columns:
 
 * hard x <w>: the hard-contact continuum braid (dnabraid.continuum.tweezer, Delta = D_c)
   at each hand with alpha replaced by alpha <w>_hand (the issue's "continuum x <w(d)> over
@@ -59,7 +59,8 @@ def run_alpha(alpha: float, args) -> dict:
     for tag, n in (("plus", args.turns), ("minus", -args.turns)):
         p = pts[round(n, 6)]
         out[tag] = {c: _val(p, c) for c in ("extension_nm", "torque_pN_nm",
-                                            "axis_distance_nm", "chiral_weight")}
+                                            "axis_distance_nm", "chiral_weight",
+                                            "ply_length_nm")}
         out[tag]["converged"] = bool(p["converged"])
         out[tag]["reason"] = p.get("convergence_reason", "")
         out[tag]["ess"] = p.get("effective_sample_size")
@@ -123,14 +124,14 @@ def render(res: list, args) -> str:
              f"{k['mc_moves']} compiled Metropolis moves (capsules and chiral term included) "
              f"per report interval, seed {k['seed']}. dz = z(+n) - z(-n), torque sum = "
              "Gamma(+n) + Gamma(-n) (trap torque), errors: the two points' standard errors in "
-             "quadrature. <w>: the mean chiral weight over the middle half of strand 1 "
-             "(1 at contact). Continuum: hard x <w> = the hard-contact braid at each hand with "
+             "quadrature. <w>, d: the mean chiral weight (1 at contact) and strand distance over the "
+             "ply (strand 1's segments closer than 2 D_c to strand 2), ply: its contour length. Continuum: hard x <w> = the hard-contact braid at each hand with "
              "alpha <w>_hand; hard = the same at w = 1; soft T = 0 = item 3's soft-range "
              "continuum (quasi-static branch).", "",
              "| alpha pN | dz bead nm | dz hard x <w> | dz hard | dz soft T=0 | torque sum bead "
-             "pN nm | hard x <w> | hard | soft T=0 | <w> +n / -n | d mid +n / -n nm | "
-             "converged +n / -n (ESS) | wall s |",
-             "|" + "---|" * 13]
+             "pN nm | hard x <w> | hard | soft T=0 | <w> +n / -n | d ply +n / -n nm | "
+             "ply +n / -n nm | converged +n / -n (ESS) | wall s |",
+             "|" + "---|" * 14]
     for r in res:
         p, m = r["plus"], r["minus"]
         lines.append(
@@ -140,6 +141,7 @@ def render(res: list, args) -> str:
             f"{_f(r['hard_w'][1], 1)} | {_f(r['hard'][1], 1)} | {_f(r['soft'][1], 1)} | "
             f"{p['chiral_weight'][0]:.3f} / {m['chiral_weight'][0]:.3f} | "
             f"{p['axis_distance_nm'][0]:.2f} / {m['axis_distance_nm'][0]:.2f} | "
+            f"{p['ply_length_nm'][0]:.0f} / {m['ply_length_nm'][0]:.0f} | "
             f"{'yes' if p['converged'] else 'NO'} / {'yes' if m['converged'] else 'NO'} "
             f"({_ess(p)} / {_ess(m)}) | {r['wall_s']:.0f} |")
     lines += ["", "Reproduce: `python workflows/chiral_room_t.py` (re-render: `--from-json "
@@ -193,8 +195,8 @@ def main(argv=None) -> int:
     ap.add_argument("--safety", type=float, default=0.3, help="timestep_safety")
     ap.add_argument("--mc-moves", type=int, default=2500)
     ap.add_argument("--replicas", type=int, default=4)
-    ap.add_argument("--steps", type=int, default=40_000)
-    ap.add_argument("--equilibration", type=int, default=8_000)
+    ap.add_argument("--steps", type=int, default=50_000)
+    ap.add_argument("--equilibration", type=int, default=10_000)
     ap.add_argument("--seed", type=int, default=1)
     ap.add_argument("--workers", type=int, default=0)
     ap.add_argument("--out", default="runs/chiral_room_t")
