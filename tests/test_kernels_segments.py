@@ -1,4 +1,4 @@
-"""The segment-pair terms in the compiled local energies (dnabraid.kernels.segments): the
+"""The segment-pair terms in the compiled local energies (dnabraid.kernels.segment_terms): the
 capsule contact between strands and the chiral term, against OpenMM (their PythonForces,
 Reference platform) and against the numpy twins (the evaluators' numpy backends), their
 change under moves of a few, many and all particles, and the braid moves' loop with both
@@ -18,7 +18,7 @@ import pytest
 from dnabraid.forces.chiral import ChiralEvaluator
 from dnabraid.forces.segment_contact import CapsuleEvaluator
 from dnabraid.kernels import TERMS, LocalEnergy
-from dnabraid.kernels.segments import read_python_force
+from dnabraid.kernels.segment_terms import read_python_force
 from dnabraid.run.chain_moves import BraidMoves
 from dnabraid.run.engine import Engine
 from dnabraid.scenes import make_scene

@@ -4,7 +4,7 @@
 For each alpha: one thermal run of the long braid (2 x 200 nm, 2 pN, tethers 40 nm apart,
 capsule contact, 150 mM) at turns -n and +n (each point built at its catenation, its own
 replicas), Brownian dynamics interleaved with the compiled Metropolis moves, which now
-carry the capsule contact and the chiral term (dnabraid.kernels.segments). Reported per
+carry the capsule contact and the chiral term (dnabraid.kernels.segment_terms). Reported per
 alpha: z(+n) - z(-n) and Gamma(+n) + Gamma(-n) with their standard errors (the two
 points' across-replica errors in quadrature), the convergence verdicts, the strands'
 distance and the mean chiral weight <w(d)> over the ply (strand 1's segments closer
@@ -15,7 +15,10 @@ than 2 D_c to strand 2) at each hand, and the ply's length (observable ``StrandD
   the measured distance distribution");
 * hard: the same at alpha (w = 1: strands held at contact);
 * soft, T = 0: the soft-range continuum of item 3 (dnabraid.continuum.soft_tweezer, the
-  disfavoured hand free to open; quasi-static branch).
+  disfavoured hand free to open; quasi-static branch);
+* hard at d x <w>: the hard-contact braid at each hand with Delta = that hand's measured mean
+  strand distance in the ply and alpha <w>_hand (the thermal braid's own radius: how much of
+  the asymmetry the measured tightening or loosening of the ply explains geometrically).
 
 Usage: python workflows/chiral_room_t.py [--alpha 0 1 3 6] [--steps 40000] ...
        python workflows/chiral_room_t.py --from-json workflows/results/chiral_room_t.json
@@ -85,9 +88,9 @@ def continuum(r: dict, args) -> None:
     n, a = abs(r["turns"]), r["alpha_pN"]
     geo = (s.force_pN, s.length_nm, s.tether_separation_nm, D)
 
-    def pair(a_plus, a_minus):
-        cp = solve_tweezer(n, *geo, bending_pN_nm2=B, alpha_pN=a_plus)
-        cm = solve_tweezer(-n, *geo, bending_pN_nm2=B, alpha_pN=a_minus)
+    def pair(a_plus, a_minus, d_plus=D, d_minus=D):
+        cp = solve_tweezer(n, *geo[:3], d_plus, bending_pN_nm2=B, alpha_pN=a_plus)
+        cm = solve_tweezer(-n, *geo[:3], d_minus, bending_pN_nm2=B, alpha_pN=a_minus)
         if not (cp.success and cm.success):
             return math.nan, math.nan
         return (cp["extension_nm"] - cm["extension_nm"],
@@ -98,6 +101,8 @@ def continuum(r: dict, args) -> None:
     r["contact_nm"] = D
     r["hard_w"] = pair(a * wp, a * wm)
     r["hard"] = pair(a, a)
+    r["hard_d_w"] = pair(a * wp, a * wm, r["plus"]["axis_distance_nm"][0],
+                         r["minus"]["axis_distance_nm"][0])
     if a == 0.0:
         r["soft"] = (0.0, 0.0)
     else:
@@ -127,18 +132,22 @@ def render(res: list, args) -> str:
              "quadrature. <w>, d: the mean chiral weight (1 at contact) and strand distance over the "
              "ply (strand 1's segments closer than 2 D_c to strand 2), ply: its contour length. Continuum: hard x <w> = the hard-contact braid at each hand with "
              "alpha <w>_hand; hard = the same at w = 1; soft T = 0 = item 3's soft-range "
-             "continuum (quasi-static branch).", "",
-             "| alpha pN | dz bead nm | dz hard x <w> | dz hard | dz soft T=0 | torque sum bead "
-             "pN nm | hard x <w> | hard | soft T=0 | <w> +n / -n | d ply +n / -n nm | "
-             "ply +n / -n nm | converged +n / -n (ESS) | wall s |",
-             "|" + "---|" * 14]
+             "continuum (quasi-static branch); hard at d x <w> = the hard-contact braid at each "
+             "hand with Delta = its measured ply distance d and alpha <w>.", "",
+             "| alpha pN | dz bead nm | dz hard x <w> | dz hard | dz soft T=0 | dz hard at d x <w> "
+             "| torque sum bead pN nm | hard x <w> | hard | soft T=0 | hard at d x <w> | "
+             "<w> +n / -n | d ply +n / -n nm | ply +n / -n nm | converged +n / -n (ESS) | "
+             "wall s |",
+             "|" + "---|" * 16]
     for r in res:
         p, m = r["plus"], r["minus"]
         lines.append(
             f"| {r['alpha_pN']:g} | {_f(r['dz_nm'][0])} +- {r['dz_nm'][1]:.2f} | "
             f"{_f(r['hard_w'][0])} | {_f(r['hard'][0])} | {_f(r['soft'][0])} | "
+            f"{_f(r['hard_d_w'][0])} | "
             f"{_f(r['torque_sum_pN_nm'][0], 1)} +- {r['torque_sum_pN_nm'][1]:.1f} | "
             f"{_f(r['hard_w'][1], 1)} | {_f(r['hard'][1], 1)} | {_f(r['soft'][1], 1)} | "
+            f"{_f(r['hard_d_w'][1], 1)} | "
             f"{p['chiral_weight'][0]:.3f} / {m['chiral_weight'][0]:.3f} | "
             f"{p['axis_distance_nm'][0]:.2f} / {m['axis_distance_nm'][0]:.2f} | "
             f"{p['ply_length_nm'][0]:.0f} / {m['ply_length_nm'][0]:.0f} | "
@@ -169,7 +178,8 @@ def plot(res: list, path: pathlib.Path) -> None:
     ax[1].errorbar(a, [r["torque_sum_pN_nm"][0] for r in res],
                    [r["torque_sum_pN_nm"][1] for r in res], fmt="o", label="bead model, 298 K")
     for key, lab, st in (("hard_w", "continuum x <w>", "s--"), ("hard", "continuum (w = 1)", "^:"),
-                         ("soft", "soft continuum, T = 0", "v-.")):
+                         ("soft", "soft continuum, T = 0", "v-."),
+                         ("hard_d_w", "continuum at measured d, x <w>", "d-")):
         ax[0].plot(a, [r[key][0] for r in res], st, label=lab)
         ax[1].plot(a, [r[key][1] for r in res], st, label=lab)
     ax[0].set_xlabel("alpha (pN)")

@@ -23,7 +23,7 @@ model's ``openmm.System`` (its parameters converted from kJ/mol once, with
   (the plectoneme: frame springs, twist joints and clamps,
   :mod:`dnabraid.forces.twist_frames`): twins in :mod:`dnabraid.kernels.twist`.
 * ``capsule`` (the segment contact between strands) and ``chiral`` (the Kornyshev term),
-  both ``openmm.PythonForce`` s: twins in :mod:`dnabraid.kernels.segments`, their
+  both ``openmm.PythonForce`` s: twins in :mod:`dnabraid.kernels.segment_terms`, their
   parameters read from the evaluator the force carries.
 
 A Force is recognised by its name and type and its energy expression is checked against
@@ -73,7 +73,7 @@ from ..forces import (
     wca_force,
 )
 from ..units import PN_NM_IN_KJ_MOL
-from . import segments as _sg
+from . import segment_terms as _sg
 from . import twist as _tw
 
 __all__ = ["LocalEnergy", "TERMS", "run_chain_moves"]
@@ -118,7 +118,7 @@ _Params = namedtuple("_Params", [
     "has_twist", "j_type", "j_p", "j_np", "j_g", "j_vec", "j_ptr", "j_list",
     # the bead's plane (beadwall of a plectoneme): attachment, per-particle bond count, k
     "has_plane", "pl_att", "pl_on", "pl_cnt", "pl_k",
-    # capsule contact between chains and the chiral term (dnabraid.kernels.segments):
+    # capsule contact between chains and the chiral term (dnabraid.kernels.segment_terms):
     # segments (global particle numbers), chain of each, D_c (nm), k (pN/nm); the chiral
     # term's chain, position in chain, segments per chain, ring flag, exclusion along a
     # chain, sample points q, weight (D_c, range, r_s, r_c in nm), N(eta') coefficients and
