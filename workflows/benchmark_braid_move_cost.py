@@ -11,7 +11,7 @@ cost at the scene's kind weights.
 
 With ``--segments``: instead of the pre-test comparison, each kind's cost with the bead
 WCA between the strands, with the capsule contact, and with the capsule contact and the
-chiral term (alpha = ``--alpha``; dnabraid.kernels.segments), the three interleaved per kind.
+chiral term (alpha = ``--alpha``; dnabraid.kernels.segment_terms), the three interleaved per kind.
 
 Usage: python workflows/benchmark_braid_move_cost.py [--turns 0 2] [--moves 20000]
        [--repeats 3] [--segments [--alpha 2]]
