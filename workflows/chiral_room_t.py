@@ -153,7 +153,9 @@ def render(res: list, args) -> str:
             f"{p['ply_length_nm'][0]:.0f} / {m['ply_length_nm'][0]:.0f} | "
             f"{'yes' if p['converged'] else 'NO'} / {'yes' if m['converged'] else 'NO'} "
             f"({_ess(p)} / {_ess(m)}) | {r['wall_s']:.0f} |")
-    lines += ["", "Reproduce: `python workflows/chiral_room_t.py` (re-render: `--from-json "
+    lines += ["", "Wall: each alpha's run on the 2 cores, shared with other work (a test suite "
+              "and a one-core study ran beside it): read it as an upper bound. Reproduce: "
+              "`python workflows/chiral_room_t.py` (re-render: `--from-json "
               "workflows/results/chiral_room_t.json`).", ""]
     return "\n".join(lines)
 
@@ -173,10 +175,16 @@ def plot(res: list, path: pathlib.Path) -> None:
 
     a = [r["alpha_pN"] for r in res]
     fig, ax = plt.subplots(1, 2, figsize=(9, 3.6))
-    ax[0].errorbar(a, [r["dz_nm"][0] for r in res], [r["dz_nm"][1] for r in res], fmt="o",
-                   label="bead model, 298 K")
-    ax[1].errorbar(a, [r["torque_sum_pN_nm"][0] for r in res],
-                   [r["torque_sum_pN_nm"][1] for r in res], fmt="o", label="bead model, 298 K")
+    conv = [r["plus"]["converged"] and r["minus"]["converged"] for r in res]
+    for ok, lab, face in ((True, "bead model, 298 K", "C0"),
+                          (False, "bead model, NOT CONVERGED", "none")):
+        sel = [i for i, c in enumerate(conv) if c == ok]
+        if not sel:
+            continue
+        for k, key in enumerate(("dz_nm", "torque_sum_pN_nm")):
+            ax[k].errorbar([a[i] for i in sel], [res[i][key][0] for i in sel],
+                           [res[i][key][1] for i in sel], fmt="o", color="C0",
+                           markerfacecolor=face, label=lab)
     for key, lab, st in (("hard_w", "continuum x <w>", "s--"), ("hard", "continuum (w = 1)", "^:"),
                          ("soft", "soft continuum, T = 0", "v-."),
                          ("hard_d_w", "continuum at measured d, x <w>", "d-")):
