@@ -9,6 +9,8 @@ in quadrature (what independent runs at +n and -n would give). At alpha = 0 the 
 exact mirror: the paired asymmetry must vanish to round-off.
 
 Usage: python workflows/mirror_pairs.py [--alpha 0 1 3 6] [--replicas 4] [--steps 60000]
+       [--mc-moves 2500 --contact capsules --equilibration 10000 --length 200
+        --separation 40 --table workflows/results/mirror_pairs_long.md]
 Writes workflows/results/mirror_pairs.md (and .json).
 """
 
@@ -31,6 +33,12 @@ def run_pair(alpha: float, n: float, args) -> dict:
              "steps": args.steps, "equilibration_steps": args.steps // 4,
              "frame_interval": 10_000, "replicas": args.replicas, "seed": args.seed,
              "alpha": alpha, "workers": args.workers}
+    if args.mc_moves:
+        fixed["mc_moves"] = args.mc_moves
+    if args.contact != "beads":
+        fixed["contact"] = args.contact
+    if args.equilibration:
+        fixed["equilibration_steps"] = args.equilibration
     if args.safety:
         fixed["timestep_safety"] = args.safety
     out = {}
@@ -62,6 +70,12 @@ def main(argv=None) -> int:
     ap.add_argument("--steps", type=int, default=60_000)
     ap.add_argument("--seed", type=int, default=1)
     ap.add_argument("--workers", type=int, default=0)
+    ap.add_argument("--mc-moves", type=int, default=0,
+                    help="compiled Metropolis moves per report interval (0: Brownian dynamics "
+                         "alone); the image draws the mirrored moves (mirror_random)")
+    ap.add_argument("--contact", default="beads", help="'beads' or 'capsules'")
+    ap.add_argument("--equilibration", type=int, default=0,
+                    help="equilibration steps (0: steps / 4)")
     ap.add_argument("--out", default="runs/mirror_pairs")
     ap.add_argument("--table", default=str(HERE / "results" / "mirror_pairs.md"))
     ap.add_argument("--contact-nm", type=float, default=5.48,
@@ -88,7 +102,9 @@ def main(argv=None) -> int:
              f"`python workflows/mirror_pairs.py`: braid 2 x {args.length:g} nm, tethers "
              f"{args.separation:g} nm, F = {args.force:g} pN, 150 mM, n = +-{n:g} built at their "
              f"catenation, {args.replicas} replica "
-             f"pairs x ({args.steps // 4} + {args.steps} steps), seed {args.seed}. Paired: mean "
+             f"pairs x ({args.equilibration or args.steps // 4} + {args.steps} steps), "
+             f"contact {args.contact}, {args.mc_moves} moves per report interval, seed "
+             f"{args.seed}. Paired: mean "
              "and standard error of the per-replica differences (original at +n minus/plus its "
              "mirror image at -n, driven by the mirrored noise). Plain: the two runs' own "
              "across-replica errors in quadrature (independent runs at +n and -n). Variance "
