@@ -24,7 +24,7 @@ import pytest
 
 from dnabraid.kernels.braid_moves import BRAID_KINDS, run_braid_moves
 from dnabraid.kernels.chain import NTERMS
-from dnabraid.run.chain_moves import BraidMoves
+from dnabraid.run.chain_moves import MIRRORED_UNIFORMS, BraidMoves, mirror_random
 from dnabraid.scenes import make_scene
 
 MIRROR = np.array([1.0, -1.0, 1.0])
@@ -33,19 +33,10 @@ TOL_NM = 1e-6
 AMPS = dict(crank_angle_rad=2.0, bead_move_nm=0.3, shear_nm=3.0, shear_z_nm=1.0,
             twist_rad=0.05, sway_rad=0.1, pivot_rad=0.15, tilt_rad=0.1, stretch_eps=0.01,
             breathe_eps=0.1, breathe_max_beads=40, crank_max_beads=40)
-#: per kind, the uniforms' columns that carry a sign (u -> 1 - u in the mirror)
-MIRRORED_UNIFORMS = {0: (4,), 2: (3,), 3: (2,), 4: (2, 3), 5: (2,), 6: (2,)}
 
 
 def _mirror_random(cum, uni, gau, mirrored=MIRRORED_UNIFORMS):
-    uni = uni.copy()
-    gau = gau.copy()
-    kind = np.minimum(np.searchsorted(cum, uni[:, 0], side="right"), len(BRAID_KINDS) - 1)
-    for k, cols in mirrored.items():
-        for c in cols:
-            uni[kind == k, c] = 1.0 - uni[kind == k, c]
-    gau[kind == 1, 1] *= -1.0
-    return uni, gau
+    return mirror_random(cum, uni, gau, mirrored)
 
 
 def _run(mv, pos, uni, gau):
@@ -105,7 +96,7 @@ def test_the_mirror_comparison_sees_a_kind_that_is_not_covariant():
 
 def test_the_image_of_a_mirror_pair_draws_the_mirrored_moves():
     """``mirror = "image"`` gives the scene's moves the mirrored random numbers
-    (dnabraid.run.chain_moves.mirror_random, the library's copy of the map above): with one
+    (dnabraid.run.chain_moves.mirror_random, the map the tests above use): with one
     seed, the image's chain from the mirrored start is the mirror of the original's
     through the public ``run``, the per-kind counts equal."""
     keys = {"length_nm": 100.0, "force_pN": 2.0, "turns": [1.25], "replicas": 1,

@@ -123,6 +123,25 @@ def _fill(pos, new, moved, i0, i1, j0, j1, after, x):
 
 
 @numba.njit(cache=True)
+def _closest_d2(u0, u1, u2, v0, v1, v2, w0, w1, w2, aa, ee):
+    """Squared closest distance of the segments p0 + s u and q0 + t v (s, t in [0, 1]),
+    w = p0 - q0, aa = |u|^2, ee = |v|^2: the clamped minimiser of Ericson (2005, Sec.
+    5.1.9), as :func:`dnabraid.forces.segment_contact.segment_distance`."""
+    bb = u0 * v0 + u1 * v1 + u2 * v2
+    cc = u0 * w0 + u1 * w1 + u2 * w2
+    ff = v0 * w0 + v1 * w1 + v2 * w2
+    den = aa * ee - bb * bb
+    s = (bb * ff - cc * ee) / den if den > 1e-14 * aa * ee else 0.0
+    s = min(1.0, max(0.0, s))
+    t = min(1.0, max(0.0, (bb * s + ff) / ee)) if ee > 1e-300 else 0.0
+    s = min(1.0, max(0.0, (bb * t - cc) / aa)) if aa > 1e-300 else 0.0
+    r0 = w0 + s * u0 - t * v0
+    r1 = w1 + s * u1 - t * v1
+    r2 = w2 + s * u2 - t * v2
+    return r0 * r0 + r1 * r1 + r2 * r2
+
+
+@numba.njit(cache=True)
 def _ext_dist2(x):
     """Squared closest distance of the two segments x[0:6], x[6:12], each extended by half
     its length beyond both ends (t in [-1/2, 3/2]: the support of the chiral share psi), so
@@ -145,18 +164,7 @@ def _ext_dist2(x):
     v2 *= 2.0
     aa = u0 * u0 + u1 * u1 + u2 * u2
     ee = v0 * v0 + v1 * v1 + v2 * v2
-    bb = u0 * v0 + u1 * v1 + u2 * v2
-    cc = u0 * w0 + u1 * w1 + u2 * w2
-    ff = v0 * w0 + v1 * w1 + v2 * w2
-    den = aa * ee - bb * bb
-    s = (bb * ff - cc * ee) / den if den > 1e-14 * aa * ee else 0.0
-    s = min(1.0, max(0.0, s))
-    t = min(1.0, max(0.0, (bb * s + ff) / ee)) if ee > 1e-300 else 0.0
-    s = min(1.0, max(0.0, (bb * t - cc) / aa)) if aa > 1e-300 else 0.0
-    r0 = w0 + s * u0 - t * v0
-    r1 = w1 + s * u1 - t * v1
-    r2 = w2 + s * u2 - t * v2
-    return r0 * r0 + r1 * r1 + r2 * r2
+    return _closest_d2(u0, u1, u2, v0, v1, v2, w0, w1, w2, aa, ee)
 
 
 @numba.njit(cache=True)
@@ -180,18 +188,7 @@ def capsule_pair(x, D, k):
     lim = D + 0.5 * (math.sqrt(aa) + math.sqrt(ee))
     if m0 * m0 + m1 * m1 + m2 * m2 >= lim * lim:
         return 0.0
-    bb = u0 * v0 + u1 * v1 + u2 * v2
-    cc = u0 * w0 + u1 * w1 + u2 * w2
-    ff = v0 * w0 + v1 * w1 + v2 * w2
-    den = aa * ee - bb * bb
-    s = (bb * ff - cc * ee) / den if den > 1e-14 * aa * ee else 0.0
-    s = min(1.0, max(0.0, s))
-    t = min(1.0, max(0.0, (bb * s + ff) / ee)) if ee > 1e-300 else 0.0
-    s = min(1.0, max(0.0, (bb * t - cc) / aa)) if aa > 1e-300 else 0.0
-    r0 = w0 + s * u0 - t * v0
-    r1 = w1 + s * u1 - t * v1
-    r2 = w2 + s * u2 - t * v2
-    d = math.sqrt(r0 * r0 + r1 * r1 + r2 * r2)
+    d = math.sqrt(_closest_d2(u0, u1, u2, v0, v1, v2, w0, w1, w2, aa, ee))
     if not d < D:
         return 0.0
     return 0.5 * k * (D - d) * (D - d)

@@ -81,13 +81,15 @@ GUARD_ABS_PN_NM = 1e-3
 MIRRORED_UNIFORMS = {0: (4,), 2: (3,), 3: (2,), 4: (2, 3), 5: (2,), 6: (2,)}
 
 
-def mirror_random(cum, uni: np.ndarray, gau: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """The random numbers of the braid moves' y -> -y mirror (:data:`MIRRORED_UNIFORMS`),
-    as new arrays; ``cum`` the kinds' cumulative weights (the kind of each proposal)."""
+def mirror_random(cum, uni: np.ndarray, gau: np.ndarray,
+                  mirrored: dict = MIRRORED_UNIFORMS) -> tuple[np.ndarray, np.ndarray]:
+    """The random numbers of the braid moves' y -> -y mirror (``mirrored``: per kind, the
+    uniforms' columns that flip; default :data:`MIRRORED_UNIFORMS`), as new arrays;
+    ``cum`` the kinds' cumulative weights (the kind of each proposal)."""
     uni = uni.copy()
     gau = gau.copy()
     kind = np.minimum(np.searchsorted(cum, uni[:, 0], side="right"), len(BRAID_KINDS) - 1)
-    for k, cols in MIRRORED_UNIFORMS.items():
+    for k, cols in mirrored.items():
         for c in cols:
             uni[kind == k, c] = 1.0 - uni[kind == k, c]
     gau[kind == 1, 1] *= -1.0
