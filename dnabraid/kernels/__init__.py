@@ -6,7 +6,9 @@ energy change of a few particles in microseconds instead of a whole-Context eval
 :class:`dnabraid.chains.Model`; :mod:`dnabraid.run.chain_moves` drives Metropolis
 crankshaft, pivot and bead moves with it. :mod:`~dnabraid.kernels.twist` adds the terms of
 torsionally constrained DNA (twist joints and clamps, frame springs, the bead's plane) and
-the twist-aware move loop of :mod:`dnabraid.run.twist_moves`.
+the twist-aware move loop of :mod:`dnabraid.run.twist_moves`;
+:mod:`~dnabraid.kernels.segment_terms` the segment-pair terms (the capsule contact between
+strands and the chiral term).
 """
 
 from .chain import TERMS, LocalEnergy
