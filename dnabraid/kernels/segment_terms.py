@@ -282,34 +282,38 @@ def chiral_pair(x, q, delta, rho, r_s, r_c, ncoef):
 
 # --------------------------------------------------------------------------- totals, deltas
 @numba.njit(cache=True)
-def capsule_total(pos, P):
-    """Capsule energy (pN nm) of the whole model."""
-    S = P.cap_seg
+def _term_total(pos, S, cid, pic, nseg, ring, excl, which, cut, k, q, delta, rho, r_s,
+                ncoef):
+    """The whole capsule (``which`` 0, pN nm) or chiral (1, per unit alpha, nm) energy:
+    every pair the term admits (parameters as :func:`_term_delta`)."""
     x = np.empty(12)
     none = np.zeros(0, np.int64)
     e = 0.0
     for u in range(S.shape[0]):
         for v in range(u + 1, S.shape[0]):
-            if P.cap_cid[u] != P.cap_cid[v]:
+            if which == 0:
+                if cid[u] != cid[v]:
+                    _fill(pos, pos, none, S[u, 0], S[u, 1], S[v, 0], S[v, 1], False, x)
+                    e += capsule_pair(x, cut, k)
+            elif _allowed(cid, pic, nseg, ring, excl, u, v):
                 _fill(pos, pos, none, S[u, 0], S[u, 1], S[v, 0], S[v, 1], False, x)
-                e += capsule_pair(x, P.cap_D, P.cap_k)
+                e += chiral_pair(x, q, delta, rho, r_s, cut, ncoef)
     return e
+
+
+@numba.njit(cache=True)
+def capsule_total(pos, P):
+    """Capsule energy (pN nm) of the whole model."""
+    return _term_total(pos, P.cap_seg, P.cap_cid, P.cap_cid, P.cap_cid, P.chi_ring, 0, 0,
+                       P.cap_D, P.cap_k, 1, 0.0, 1.0, 0.0, P.chi_ncoef)
 
 
 @numba.njit(cache=True)
 def chiral_total(pos, P):
     """Chiral energy (pN nm) of the whole model."""
-    S = P.chi_seg
-    x = np.empty(12)
-    none = np.zeros(0, np.int64)
-    e = 0.0
-    for u in range(S.shape[0]):
-        for v in range(u + 1, S.shape[0]):
-            if _allowed(P.chi_cid, P.chi_pic, P.chi_nseg, P.chi_ring, P.chi_excl, u, v):
-                _fill(pos, pos, none, S[u, 0], S[u, 1], S[v, 0], S[v, 1], False, x)
-                e += chiral_pair(x, P.chi_q, P.chi_delta, P.chi_rho, P.chi_rs, P.chi_rc,
-                                 P.chi_ncoef)
-    return P.chi_alpha * e
+    return P.chi_alpha * _term_total(pos, P.chi_seg, P.chi_cid, P.chi_pic, P.chi_nseg,
+                                     P.chi_ring, P.chi_excl, 1, P.chi_rc, 0.0, P.chi_q,
+                                     P.chi_delta, P.chi_rho, P.chi_rs, P.chi_ncoef)
 
 
 @numba.njit(cache=True)
