@@ -22,8 +22,6 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from dnabraid.kernels.braid_moves import BRAID_KINDS, run_braid_moves
-from dnabraid.kernels.chain import NTERMS
 from dnabraid.run.chain_moves import MIRRORED_UNIFORMS, BraidMoves, mirror_random
 from dnabraid.scenes import make_scene
 
@@ -40,14 +38,7 @@ def _mirror_random(cum, uni, gau, mirrored=MIRRORED_UNIFORMS):
 
 
 def _run(mv, pos, uni, gau):
-    terms = np.zeros(NTERMS)
-    _, cat = run_braid_moves(pos, mv.energy.params, mv._c_ptr, mv._c_beads, mv._c_fixed,
-                             mv._mobile, mv._wgt, mv.center, mv._cum, mv.crank_max,
-                             mv.crank_angle, mv.bead_nm, mv.shear_nm, mv.shear_z_nm,
-                             mv.twist_rad, mv.sway_rad, mv.pivot_rad, mv.tilt_rad,
-                             mv.stretch_eps, mv._ratio(pos), mv.breathe_eps, mv.breathe_max,
-                             mv.kT, uni, gau, mv._stats, terms, mv.passage_test)
-    return cat
+    return mv.run_with(pos, uni, gau)[2]
 
 
 def _coupled(turns, blocks, mirrored=MIRRORED_UNIFORMS, seed=1):

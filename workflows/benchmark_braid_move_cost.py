@@ -44,14 +44,21 @@ def _amps(sc) -> dict:
                 breathe_max_beads=sc.breathe_max_beads, crank_max_beads=sc.crank_max_beads)
 
 
-def table(turns: float, moves: int, repeats: int) -> list[str]:
-    sc = make_scene("braid", dict(LONG_BRAID, turns=[turns], replicas=1))
+def _equilibrated(turns: float, **keys):
+    """The long braid at ``turns`` (scene ``keys`` added), its model, a state after 1e5
+    moves of all kinds, and its local energy."""
+    sc = make_scene("braid", dict(LONG_BRAID, turns=[turns], replicas=1, **keys))
     m = sc.build()
     pos = np.array(sc.start_positions(m, turns), float)
     mv = BraidMoves.for_model(m, moves_per_call=2000, seed=1, guard_every=0, **_amps(sc))
     mv.energy.set_trap_angle(2 * np.pi * turns)
     for _ in range(50):
         pos, _ = mv.run(pos)
+    return sc, m, pos, mv.energy
+
+
+def table(turns: float, moves: int, repeats: int) -> list[str]:
+    sc, m, pos, _ = _equilibrated(turns)
     lines = [f"turns {turns:g}: {'kind':>10} {'us/move pre-test':>16} {'us/move Gauss only':>18} "
              f"{'ratio':>6} {'acceptance':>10} {'refused':>8}"]
     cost = {True: 0.0, False: 0.0}
@@ -84,16 +91,7 @@ def segments_table(turns: float, moves: int, repeats: int, alpha: float) -> list
     """Per kind: us per move with the bead WCA, the capsules, the capsules + chiral term."""
     variants = {"beads": {}, "capsules": {"contact": "capsules"},
                 f"capsules+chiral {alpha:g} pN": {"contact": "capsules", "alpha": alpha}}
-    built = {}
-    for name, kw in variants.items():
-        sc = make_scene("braid", dict(LONG_BRAID, turns=[turns], replicas=1, **kw))
-        m = sc.build()
-        pos = np.array(sc.start_positions(m, turns), float)
-        mv = BraidMoves.for_model(m, moves_per_call=2000, seed=1, guard_every=0, **_amps(sc))
-        mv.energy.set_trap_angle(2 * np.pi * turns)
-        for _ in range(50):
-            pos, _ = mv.run(pos)
-        built[name] = (sc, m, pos, mv.energy)
+    built = {name: _equilibrated(turns, **kw) for name, kw in variants.items()}
     names = list(variants)
     lines = [f"turns {turns:g}: {'kind':>10} " + " ".join(f"{n:>24}" for n in names)
              + "  (us per move; acceptance)"]

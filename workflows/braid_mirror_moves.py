@@ -8,7 +8,7 @@ A. The model: energy (every term) and catenation of a start and of its mirror (E
    (exact with ``start_spread`` = 0; with overdispersed starts the braid-axis bow keeps its
    direction psi, drawn from the seed alone, so +n and -n starts of one seed are not
    mirrors, only mirror-distributed).
-B. Mirror coupling (sample-path test of the kernel, :func:`run_braid_moves`): the chain at
+B. Mirror coupling (sample-path test of the kernel, ``BraidMoves.run_with``): the chain at
    +n and the chain from the mirrored start at -n are fed the *mirrored* random numbers
    (per kind: the rotation angles' uniforms u -> 1 - u for crankshaft, twist, sway, pivot
    and tilt, the shear's and the sway's azimuth u -> 1 - u, the bead move's Gaussian y
@@ -39,9 +39,8 @@ import time
 import numpy as np
 
 from dnabraid.analysis.stats import blocking_sem
-from dnabraid.kernels.braid_moves import BRAID_KINDS, catenation, run_braid_moves
-from dnabraid.kernels.chain import NTERMS
-from dnabraid.run.chain_moves import BraidMoves
+from dnabraid.kernels.braid_moves import BRAID_KINDS, catenation
+from dnabraid.run.chain_moves import BraidMoves, mirror_random
 from dnabraid.scenes import make_scene
 
 HERE = pathlib.Path(__file__).resolve().parent
@@ -52,7 +51,6 @@ AMPS = dict(crank_angle_rad=2.0, bead_move_nm=0.3, shear_nm=3.0, shear_z_nm=1.0,
             breathe_eps=0.1, breathe_max_beads=40, crank_max_beads=40)
 #: per kind, the columns of ``uni`` whose uniform is mirrored u -> 1 - u (an angle's sign
 #: or an azimuth); the bead kind (1) mirrors its Gaussian's y instead
-MIRRORED_UNIFORMS = {0: (4,), 2: (3,), 3: (2,), 4: (2, 3), 5: (2,), 6: (2,)}
 
 
 def build(length_nm: float, turns: float, seed: int = 1, **kw):
@@ -67,30 +65,9 @@ def moves(model, turns: float, seed: int) -> BraidMoves:
     return mv
 
 
-def mirror_random(cum, uni, gau):
-    """The random numbers that drive the mirror image of a move (module docstring, B)."""
-    uni = uni.copy()
-    gau = gau.copy()
-    kind = np.minimum(np.searchsorted(cum, uni[:, 0], side="right"), len(BRAID_KINDS) - 1)
-    for k, cols in MIRRORED_UNIFORMS.items():
-        sel = kind == k
-        for c in cols:
-            uni[sel, c] = 1.0 - uni[sel, c]
-    gau[kind == 1, 1] *= -1.0
-    return uni, gau
-
-
 def run_with(mv: BraidMoves, pos, uni, gau) -> float:
-    """``run_braid_moves`` on ``pos`` (in place) with the given random numbers (as
-    BraidMoves._run, which draws its own); returns the catenation."""
-    terms = np.zeros(NTERMS)
-    _, cat = run_braid_moves(pos, mv.energy.params, mv._c_ptr, mv._c_beads, mv._c_fixed,
-                             mv._mobile, mv._wgt, mv.center, mv._cum, mv.crank_max,
-                             mv.crank_angle, mv.bead_nm, mv.shear_nm, mv.shear_z_nm,
-                             mv.twist_rad, mv.sway_rad, mv.pivot_rad, mv.tilt_rad,
-                             mv.stretch_eps, mv._ratio(pos), mv.breathe_eps, mv.breathe_max,
-                             mv.kT, uni, gau, mv._stats, terms, mv.passage_test)
-    return float(cat)
+    """The moves on ``pos`` (in place) with the given random numbers; the catenation."""
+    return float(mv.run_with(pos, uni, gau)[2])
 
 
 def check_model(length_nm: float, turns: float) -> dict:

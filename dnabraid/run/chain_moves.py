@@ -454,16 +454,26 @@ class BraidMoves(ChainMoves):
                    model.dna.kT, **kw)
 
     def _run(self, pos: np.ndarray, n: int) -> tuple[np.ndarray, float]:
-        le = self.energy
-        if le.n != len(self._wgt):
-            wgt = np.zeros(le.n)
-            wgt[:len(self._wgt)] = self._wgt
-            self._wgt = wgt
         uni = self.rng.random((n, 6))
         gau = self.rng.standard_normal((n, 3))
         if self.mirror:
             uni, gau = mirror_random(self._cum, uni, gau)
         before = self._stats.copy()
+        terms, absum, cat = self.run_with(pos, uni, gau)
+        self.catenation = float(cat)
+        self._tally(before, BRAID_KINDS)
+        return terms, float(absum)
+
+    def run_with(self, pos: np.ndarray, uni: np.ndarray, gau: np.ndarray):
+        """The compiled loop on ``pos`` (in place) with the given random numbers (uniforms
+        (n, 6), Gaussians (n, 3): one proposal per row; mirror studies feed their own);
+        returns (accepted change per term, sum of |dE| accepted, catenation). Statistics
+        accumulate in the compiled counters, not in :attr:`stats`."""
+        le = self.energy
+        if le.n != len(self._wgt):
+            wgt = np.zeros(le.n)
+            wgt[:len(self._wgt)] = self._wgt
+            self._wgt = wgt
         terms = np.zeros(NTERMS)
         absum, cat = run_braid_moves(pos, le.params, self._c_ptr, self._c_beads,
                                      self._c_fixed, self._mobile, self._wgt, self.center,
@@ -473,9 +483,7 @@ class BraidMoves(ChainMoves):
                                      self.tilt_rad, self.stretch_eps, self._ratio(pos),
                                      self.breathe_eps, self.breathe_max, self.kT, uni, gau,
                                      self._stats, terms, self.passage_test)
-        self.catenation = float(cat)
-        self._tally(before, BRAID_KINDS)
-        return terms, float(absum)
+        return terms, absum, cat
 
     def _ratio(self, pos) -> float:
         """The stretch move's a (fixed at the first call; see the constructor)."""
