@@ -212,3 +212,50 @@ def sweep_plot(spec, rows: list[dict], path: str) -> str | None:
     fig.savefig(tmp, dpi=110, format="png")
     os.replace(tmp, path)
     return path
+
+
+def hat_curve_plot(points: list, result: dict, path: str, title: str = "") -> str:
+    """The hat curve (extension and twist torque against turns) beside rod theory, to
+    ``path`` (PNG): the Moroz-Nelson torque line below buckling, the plateau torque, the
+    classical buckling torque sqrt(2 kT A F) and the two-phase slope -pi x tau / g drawn
+    through the buckled points' mean (:func:`dnabraid.analysis.hat_curve.hat_curve`).
+    Unconverged points are open markers."""
+    from matplotlib.figure import Figure
+
+    n = np.array([p["turns"] for p in points], float)
+    z = np.array([p["extension_nm"]["mean"] for p in points], float)
+    zs = np.array([p["extension_nm"]["sem"] for p in points], float)
+    t = np.array([p["twist_torque_pN_nm"]["mean"] for p in points], float)
+    ts = np.array([p["twist_torque_pN_nm"]["sem"] for p in points], float)
+    conv = np.array([p.get("converged") is not False for p in points], bool)
+    fig = Figure(figsize=(5.5, 6))
+    ax1, ax2 = fig.subplots(2, 1, sharex=True)
+    for ax, y, e in ((ax1, z, zs), (ax2, t, ts)):
+        ax.errorbar(n[conv], y[conv], e[conv], fmt="o", color="C0", label="simulation")
+        if (~conv).any():
+            ax.errorbar(n[~conv], y[~conv], e[~conv], fmt="o", mfc="none", color="C0",
+                        label="not converged")
+    nb = result.get("n_buckle", float("nan"))
+    if "slope_two_phase" in result and np.isfinite(nb):
+        b = n >= nb
+        n0, z0 = float(np.mean(n[b])), float(np.mean(z[b]))
+        nn = np.linspace(n[b].min(), n[b].max(), 2)
+        ax1.plot(nn, z0 + result["slope_two_phase"] * (nn - n0), "--", color="C3",
+                 label=f"two-phase slope {result['slope_two_phase']:.0f} nm/turn")
+    nn = np.linspace(0, n.max(), 50)
+    kT, L = result["kT"], result.get("L")
+    if L:
+        ax2.plot(nn, 2 * np.pi * kT * result["ceff_theory"] * nn / L, ":", color="C2",
+                 label="Moroz-Nelson C_eff")
+    ax2.axhline(result["gamma_b_theory"], color="C1", ls="-.", label="sqrt(2 kT A F)")
+    if "plateau_torque" in result:
+        ax2.axhline(result["plateau_torque"], color="C3", ls="--", label="plateau (simulated)")
+    ax1.set_ylabel("extension (nm)")
+    ax2.set_ylabel("twist torque (pN nm)")
+    ax2.set_xlabel("turns n")
+    ax1.legend(fontsize=7)
+    ax2.legend(fontsize=7)
+    if title:
+        ax1.set_title(title, fontsize=8)
+    fig.tight_layout()
+    return _save(fig, path, 120)

@@ -183,3 +183,32 @@ def test_hat_curve_theory_values():
         100.0 * (1.0 - 0.5 * math.sqrt(kT / 50.0)), rel=1e-12)
     assert moroz_nelson_ceff(100.0, 50.0, 1.0, kT) == pytest.approx(85.66, abs=0.01)
     assert buckling_torque(50.0, 1.0, kT) == pytest.approx(20.27, abs=0.01)
+
+
+def test_two_phase_theory_values():
+    """Marko's (2007) two-phase coexistence at F = 1 pN, A = 50 nm, C = 100 nm, kT = 4.11
+    pN nm, P = 24 nm, by independent arithmetic: g = F - sqrt(kT F / A), c_s from
+    Moroz-Nelson, tau^2 = 2 g p c_s / (c_s - p) (p = kT P, c_s = kT C_s); the slope from the
+    two twist rates -2 pi x / (w_p - w_s) equals the parameter-free -pi x tau / g, and the
+    stiffness implied by the torque returns P."""
+    from dnabraid.analysis.hat_curve import (coexistence_slope, implied_plectoneme_stiffness,
+                                             marko_two_phase)
+
+    kT, F, A, C, P = 4.11, 1.0, 50.0, 100.0, 24.0
+    g = F - math.sqrt(kT * F / A)
+    cs = kT * 100.0 * (1.0 - 0.5 * math.sqrt(kT / 50.0))
+    p = kT * P
+    tau = math.sqrt(2.0 * g * p * cs / (cs - p))
+    r = marko_two_phase(C, A, F, kT, P)
+    assert r["torque"] == pytest.approx(tau, rel=1e-12)
+    assert r["torque"] == pytest.approx(13.98, abs=0.01)
+    x = 1.0 - 0.5 * math.sqrt(kT / (A * F))
+    assert r["slope_nm_per_turn"] == pytest.approx(-2 * math.pi * x / (tau / p - tau / cs),
+                                                   rel=1e-12)
+    assert coexistence_slope(r["torque"], A, F, kT) == pytest.approx(r["slope_nm_per_turn"],
+                                                                     rel=1e-12)
+    assert implied_plectoneme_stiffness(r["torque"], C, A, F, kT) == pytest.approx(P, rel=1e-12)
+    with pytest.raises(ValueError, match="P = "):
+        marko_two_phase(C, A, F, kT, 90.0)
+    with pytest.raises(ValueError, match="below kT / A"):
+        coexistence_slope(10.0, A, 0.05, kT)

@@ -43,17 +43,35 @@ def main(argv=None):
     ap.add_argument("--seed", type=int, default=5)
     ap.add_argument("--replicas", type=int, default=None,
                     help="independent replicas per turn value (default: the scene's)")
+    ap.add_argument("--mc-moves", type=int, default=None,
+                    help="twist-aware moves per report interval (default: the scene's)")
+    ap.add_argument("--protocol", default="independent", choices=("independent", "ramp"))
+    ap.add_argument("--turn-rate", type=float, default=None, help="turns per step of the ramp")
+    ap.add_argument("--frame-interval", type=int, default=2000)
     here = os.path.dirname(os.path.abspath(__file__))
     ap.add_argument("--run", default=None, help="run directory (default results/plectoneme_F..)")
     ap.add_argument("--out", default=os.path.join(here, "results", "plectoneme_hat.txt"))
+    ap.add_argument("--summary", default=None,
+                    help="analyse the summary.json of a finished run instead of running")
     a = ap.parse_args(argv)
     s = make_scene("plectoneme", {
         "force_pN": a.force, "length_nm": a.length,
         "turns": [float(x) for x in a.turns.split(",")], "steps": a.steps,
-        "equilibration_steps": a.equilibration, "frame_interval": 2000, "seed": a.seed,
-        **({"replicas": a.replicas} if a.replicas else {})})
+        "equilibration_steps": a.equilibration, "frame_interval": a.frame_interval,
+        "seed": a.seed, "protocol": a.protocol,
+        **({"replicas": a.replicas} if a.replicas else {}),
+        **({"mc_moves": a.mc_moves} if a.mc_moves is not None else {}),
+        **({"turn_rate": a.turn_rate} if a.turn_rate else {})})
     run = a.run or os.path.join(here, "results", f"plectoneme_F{a.force:g}_L{a.length:g}")
-    summ = s.run(run)
+    if a.summary:
+        import json
+        with open(a.summary) as fh:
+            summ = json.load(fh)
+        run = os.path.dirname(os.path.abspath(a.summary))
+        a.force, a.length = summ["scene"]["force_pN"], summ["scene"]["length_nm"]
+        s = make_scene("plectoneme", summ["scene"])
+    else:
+        summ = s.run(run)
     pts, res = hat_curve(summ)
     lines = [f"# plectoneme scene F = {a.force} pN, L = {a.length} nm, A = {s.persistence_nm} nm, "
              f"C = {s.twist_persistence_nm} nm, {s.salt_mM} mM; run {run}; wall "
@@ -76,11 +94,23 @@ def main(argv=None):
                                        f"{res['plateau_torque_err']:.1f} pN nm" if
                                        "plateau_torque" in res else "n/a (no buckling)")
                  + f"; buckling at n = {res['n_buckle']} turns")
+    if "slope_sim" in res:
+        lines.append(
+            f"slope after buckling {res['slope_sim']:.1f} +- {res['slope_sim_err']:.1f} nm/turn; "
+            f"two-phase coexistence (Marko 2007) -pi x tau / g at the plateau torque: "
+            f"{res['slope_two_phase']:.1f} +- {res['slope_two_phase_err']:.1f} nm/turn; "
+            f"implied plectoneme twist stiffness P = {res['P_implied']:.1f} nm")
+    n_conv = sum(1 for p in pts if p.get("converged"))
+    lines.append(f"converged points: {n_conv} of {len(pts)}")
     text = "\n".join(lines)
     print(text)
     os.makedirs(os.path.dirname(a.out), exist_ok=True)
     with open(a.out, "w") as fh:
         fh.write(text + "\n")
+    from dnabraid.plots import hat_curve_plot
+    png = hat_curve_plot(pts, res, os.path.splitext(a.out)[0] + ".png",
+                         f"plectoneme {a.length:g} nm, {a.force:g} pN")
+    print(f"plot: {png}")
     return res
 
 
