@@ -69,7 +69,7 @@ def main(argv=None):
             summ = json.load(fh)
         run = os.path.dirname(os.path.abspath(a.summary))
         a.force, a.length = summ["scene"]["force_pN"], summ["scene"]["length_nm"]
-        s = make_scene("plectoneme", summ["scene"])
+        s = make_scene("plectoneme", {k: v for k, v in summ["scene"].items() if k != "scene"})
     else:
         summ = s.run(run)
     pts, res = hat_curve(summ)
@@ -99,7 +99,8 @@ def main(argv=None):
             f"slope after buckling {res['slope_sim']:.1f} +- {res['slope_sim_err']:.1f} nm/turn; "
             f"two-phase coexistence (Marko 2007) -pi x tau / g at the plateau torque: "
             f"{res['slope_two_phase']:.1f} +- {res['slope_two_phase_err']:.1f} nm/turn; "
-            f"implied plectoneme twist stiffness P = {res['P_implied']:.1f} nm")
+            f"implied plectoneme twist stiffness P = {res['P_implied']:.1f} nm; two-phase onset "
+            f"at n = {res['n_onset_two_phase']:.2f} turns")
     n_conv = sum(1 for p in pts if p.get("converged"))
     lines.append(f"converged points: {n_conv} of {len(pts)}")
     text = "\n".join(lines)

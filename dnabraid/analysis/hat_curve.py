@@ -99,7 +99,9 @@ def hat_curve(summary: dict) -> tuple[list, dict]:
         buckled points) and, with two or more buckled points, ``slope_sim`` +-
         ``slope_sim_err`` (nm per turn; a weighted straight line through their extensions)
         beside ``slope_two_phase`` +- ``slope_two_phase_err`` (:func:`coexistence_slope` at
-        the plateau torque) and ``P_implied`` (nm; :func:`implied_plectoneme_stiffness`).
+        the plateau torque), ``P_implied`` (nm; :func:`implied_plectoneme_stiffness`) and
+        ``n_onset_two_phase`` (turns at which the stretched phase's torque, C_eff of
+        Moroz-Nelson, reaches the plateau: where the two-phase model starts coexistence).
     """
     sc = summary["scene"]
     kT = KB_PN_NM * float(sc.get("temperature_K", 298.15))
@@ -130,6 +132,8 @@ def hat_curve(summary: dict) -> tuple[list, dict]:
         s1 = coexistence_slope(1.0, A, F, kT)
         out["slope_two_phase"], out["slope_two_phase_err"] = s1 * tau, abs(s1) * dtau
         out["P_implied"] = implied_plectoneme_stiffness(tau, C, A, F, kT)
+        # where the stretched phase reaches the plateau torque: the two-phase onset
+        out["n_onset_two_phase"] = tau * L / (TWO_PI * kT * out["ceff_theory"])
     if buckled.size >= 2:
         z = np.array([p["extension_nm"]["mean"] for p in pts])[buckled]
         zs = np.array([p["extension_nm"]["sem"] for p in pts])[buckled]
