@@ -212,3 +212,37 @@ def test_two_phase_theory_values():
         marko_two_phase(C, A, F, kT, 90.0)
     with pytest.raises(ValueError, match="below kT / A"):
         coexistence_slope(10.0, A, 0.05, kT)
+
+
+def test_hat_curve_recovers_two_phase_curve():
+    """hat_curve on a synthetic summary drawn from the two-phase model (P = 22 nm, 1 um, 1 pN):
+    twist torque 2 pi kT C_s n / L up to the coexistence torque, then flat; extension
+    falling at Marko's slope after the onset. The analysis must return that slope, that
+    plateau, P and the onset (exact data: tolerances are round-off); at a force below kT / A
+    it leaves the two-phase quantities out instead of failing."""
+    from dnabraid.analysis.hat_curve import hat_curve, marko_two_phase
+    from dnabraid.units import KB_PN_NM
+
+    kT = KB_PN_NM * 298.15
+    C, A, F, L, P = 100.0, 50.0, 1.0, 1000.0, 22.0
+    r = marko_two_phase(C, A, F, kT, P)
+    ns = r["torque"] * L / (2 * math.pi * kT * r["C_s"])
+    pts = []
+    for n in [0, 2, 4, 8, 10, 12, 14]:
+        buck = n > ns
+        tq = r["torque"] if buck else 2 * math.pi * kT * r["C_s"] * n / L
+        z = 850.0 + (r["slope_nm_per_turn"] * (n - ns) if buck else 0.0)
+        pts.append({"turns": n, "twist_torque_pN_nm": {"mean": tq, "sem": 0.1},
+                    "extension_nm": {"mean": z, "sem": 1.0},
+                    "plectoneme_fraction": 1.0 if buck else 0.0})
+    scene = {"length_nm": L, "twist_persistence_nm": C, "persistence_nm": A, "force_pN": F,
+             "temperature_K": 298.15}
+    _, res = hat_curve({"scene": scene, "points": pts})
+    assert res["plateau_torque"] == pytest.approx(r["torque"], rel=1e-12)
+    assert res["slope_sim"] == pytest.approx(r["slope_nm_per_turn"], rel=1e-9)
+    assert res["slope_two_phase"] == pytest.approx(r["slope_nm_per_turn"], rel=1e-12)
+    assert res["P_implied"] == pytest.approx(P, rel=1e-12)
+    assert res["n_onset_two_phase"] == pytest.approx(ns, rel=1e-12)
+    assert res["ceff_sim"] == pytest.approx(r["C_s"], rel=1e-9)
+    _, low = hat_curve({"scene": dict(scene, force_pN=0.05), "points": pts})
+    assert "slope_two_phase" not in low and "plateau_torque" in low

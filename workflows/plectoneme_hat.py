@@ -94,7 +94,7 @@ def main(argv=None):
                                        f"{res['plateau_torque_err']:.1f} pN nm" if
                                        "plateau_torque" in res else "n/a (no buckling)")
                  + f"; buckling at n = {res['n_buckle']} turns")
-    if "slope_sim" in res:
+    if "slope_sim" in res and "slope_two_phase" in res:
         lines.append(
             f"slope after buckling {res['slope_sim']:.1f} +- {res['slope_sim_err']:.1f} nm/turn; "
             f"two-phase coexistence (Marko 2007) -pi x tau / g at the plateau torque: "

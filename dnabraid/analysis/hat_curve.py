@@ -129,11 +129,12 @@ def hat_curve(summary: dict) -> tuple[list, dict]:
         out["plateau_torque"] = float(np.mean(tq[buckled]))
         out["plateau_torque_err"] = float(np.sqrt(np.sum(tq_sem[buckled] ** 2)) / buckled.size)
         tau, dtau = out["plateau_torque"], out["plateau_torque_err"]
-        s1 = coexistence_slope(1.0, A, F, kT)
-        out["slope_two_phase"], out["slope_two_phase_err"] = s1 * tau, abs(s1) * dtau
-        out["P_implied"] = implied_plectoneme_stiffness(tau, C, A, F, kT)
-        # where the stretched phase reaches the plateau torque: the two-phase onset
-        out["n_onset_two_phase"] = tau * L / (TWO_PI * kT * out["ceff_theory"])
+        if F * A > kT and tau > 0:  # the two-phase model's high-force stretched phase
+            s1 = coexistence_slope(1.0, A, F, kT)
+            out["slope_two_phase"], out["slope_two_phase_err"] = s1 * tau, abs(s1) * dtau
+            out["P_implied"] = implied_plectoneme_stiffness(tau, C, A, F, kT)
+            # where the stretched phase reaches the plateau torque: the two-phase onset
+            out["n_onset_two_phase"] = tau * L / (TWO_PI * kT * out["ceff_theory"])
     if buckled.size >= 2:
         z = np.array([p["extension_nm"]["mean"] for p in pts])[buckled]
         zs = np.array([p["extension_nm"]["sem"] for p in pts])[buckled]
