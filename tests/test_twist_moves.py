@@ -66,11 +66,21 @@ def _sample(m, mv, angle, n_samples, every, burn, writhe_every=1):
     return z, tw, wr, lk_err
 
 
+def _batch_sem(x, batches=10):
+    """Standard error from the means of ``batches`` contiguous batches."""
+    n = len(x) // batches
+    b = np.asarray(x[:n * batches]).reshape(batches, n).mean(axis=1)
+    return float(b.std(ddof=1) / math.sqrt(batches))
+
+
 def _check(x, want, want_sem=0.0):
-    r = blocking_sem(x)
-    sem = math.hypot(r["sem"], want_sem)
-    assert abs(x.mean() - want) < TOL_SEM * sem, (x.mean(), want, r["sem"], want_sem)
-    return r["sem"]
+    # the larger of the blocking SEM and a 10-batch-means SEM: blocking alone read 0.020 nm
+    # for the free-bead extension at seed 11 where seeds 12 and 13 read 0.13-0.15 (a slow
+    # mode it missed), and the test failed at 12.8 of those underestimated SEs
+    se = max(blocking_sem(x)["sem"], _batch_sem(x))
+    sem = math.hypot(se, want_sem)
+    assert abs(x.mean() - want) < TOL_SEM * sem, (x.mean(), want, se, want_sem)
+    return se
 
 
 def test_free_bead_moves_alone_give_the_exact_twist_and_extension():
