@@ -152,6 +152,57 @@ def test_moves_in_the_compiled_loop_add_up_to_the_openmm_change():
     assert all(mv.stats[k].accepted > 50 for k in mv.kinds)
 
 
+def test_rigid_large_moves_price_only_the_pairs_they_change():
+    """A rigid motion of more than ``_SWEEP_MIN`` particles takes its WCA change from the
+    moved-unmoved pairs alone (``_wca_cross``, bounding boxes and a sweep along z): the
+    compiled kernel's rigid dE equals OpenMM's energy difference term by term on crumpled
+    tethers full of contacts, pivots of 25-40 beads turned by up to pi; and searching the
+    bonded terms from the particles next to the pivot alone gives the same change."""
+    from dnabraid.kernels import chain as ch
+
+    m = _model(True, True)
+    le = LocalEnergy(m)
+    P = le.params
+    eng = Engine.for_model(m, platform="Reference")
+    rng = np.random.default_rng(17)
+    n = len(m.positions)
+    checked = changed = 0
+    for _ in range(3):
+        pos = _crumpled(m, rng)
+        H, ncon, _, dcon, moved, _, _, out = ch.loop_setup(pos, P, len(TERMS))
+        before = _openmm_terms(eng, m, pos)
+        for _ in range(12):
+            i = int(rng.integers(1, n - ch._SWEEP_MIN - 1))
+            idx = np.arange(i, n, dtype=np.int64)
+            assert len(idx) > ch._SWEEP_MIN
+            R = random_rotation(rng, np.pi)
+            new = np.ascontiguousarray((pos[idx] - pos[i - 1]) @ R.T + pos[i - 1])
+            moved[:] = 0
+            moved[idx] = np.arange(1, len(idx) + 1)
+            dE = ch.delta_kernel(pos, idx, new, moved, True, P, H, out, np.inf, ncon, dcon,
+                                 False, np.eye(3), np.zeros(3), idx)
+            # the bonded terms searched from the two beads next to the pivot alone (the
+            # bond and the two hinges that hold an unmoved bead): the same change
+            out2 = np.zeros_like(out)
+            dE2 = ch.delta_kernel(pos, idx, new, moved, True, P, H, out2, np.inf, ncon, dcon,
+                                  False, np.eye(3), np.zeros(3), idx[:2].copy())
+            assert np.allclose(out2, out, rtol=1e-12, atol=1e-9) and abs(dE2 - dE) <= 1e-9 * (
+                1.0 + abs(dE))
+            after_pos = pos.copy()
+            after_pos[idx] = new
+            after = _openmm_terms(eng, m, after_pos)
+            for k, t in enumerate(TERMS):
+                if t in after:
+                    want = after[t] - before[t]
+                    tol = max(REL * max(abs(after[t]), abs(before[t])), ABS)
+                    assert abs(out[k] - want) <= tol, (t, out[k], want)
+            assert abs(dE - sum(after.values()) + sum(before.values())) <= 1e-8 * (
+                1.0 + sum(abs(v) for v in after.values()) + sum(abs(v) for v in before.values()))
+            checked += 1
+            changed += abs(after["wca"] - before["wca"]) > 1.0
+    assert checked == 36 and changed > 10  # the moves changed the WCA energy
+
+
 def test_unknown_force_or_changed_expression_is_refused():
     m = _model(True, True)
     f = openmm.CustomExternalForce("x")

@@ -725,7 +725,7 @@ def run_braid_moves(pos, P, c_ptr, c_beads, c_fixed, mobile, wgt, center, cum, c
         if hastings:
             thr += kT * logj  # accept when dE < kT (log J - log u)
         dE = delta_kernel(pos, idx[:m], new[:m], moved, rigid, P, H, dterm, thr, ncon, dcon, False,
-                    rinv, cen)
+                          rinv, cen, idx[:m])
         ok = math.isfinite(dE) and ((dE <= 0.0 and not hastings) or dE < thr)
         strands = kind != 6 and not (kind == 1 and ch < 0)
         if ok and strands:

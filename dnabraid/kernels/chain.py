@@ -414,7 +414,80 @@ def _wca_sweep(P, pos, new, moved, after):
 
 
 @numba.njit(cache=True)
-def delta_kernel(pos, idx, new, moved, rigid, P, H, out, thr, ncon, dcon, flip, rinv, center):
+def _wca_cross(P, pos, new, moved, after):
+    """WCA energy (pN nm) and number of interacting pairs between the moved and the
+    unmoved switched-on particles, the moved ones at their old (``after`` False) or new
+    positions. A rigid move keeps every moved-moved and unmoved-unmoved pair, so its WCA
+    change is ``_wca_cross(after) - _wca_cross(before)``. Only particles inside the other
+    set's bounding box grown by r_c can take part; those are sorted along z and swept
+    (Baraff 1992) as in :func:`_wca_sweep`. For a pivot of a stretched tether (the two
+    sets meet near the pivot) the band holds a few particles instead of all of them."""
+    n = P.n
+    rc = P.rc
+    big = np.inf
+    lo_m = np.full(3, big)
+    hi_m = np.full(3, -big)
+    lo_u = np.full(3, big)
+    hi_u = np.full(3, -big)
+    xyz = np.empty((n, 3))
+    for p in range(n):
+        if not P.w_on[p]:
+            continue
+        s = moved[p]
+        if s > 0:
+            for c in range(3):
+                v = new[s - 1, c] if after else pos[p, c]
+                xyz[p, c] = v
+                lo_m[c] = min(lo_m[c], v)
+                hi_m[c] = max(hi_m[c], v)
+        else:
+            for c in range(3):
+                v = pos[p, c]
+                xyz[p, c] = v
+                lo_u[c] = min(lo_u[c], v)
+                hi_u[c] = max(hi_u[c], v)
+    ids = np.empty(n, np.int64)
+    k = 0
+    for p in range(n):
+        if not P.w_on[p]:
+            continue
+        if moved[p] > 0:
+            lo, hi = lo_u, hi_u
+        else:
+            lo, hi = lo_m, hi_m
+        if (xyz[p, 0] >= lo[0] - rc and xyz[p, 0] <= hi[0] + rc
+                and xyz[p, 1] >= lo[1] - rc and xyz[p, 1] <= hi[1] + rc
+                and xyz[p, 2] >= lo[2] - rc and xyz[p, 2] <= hi[2] + rc):
+            ids[k] = p
+            k += 1
+    zs = np.empty(k)
+    for a in range(k):
+        zs[a] = xyz[ids[a], 2]
+    order = np.argsort(zs)
+    e = 0.0
+    cnt = 0
+    for ai in range(k):
+        p = ids[order[ai]]
+        mp = moved[p] > 0
+        for bi in range(ai + 1, k):
+            q = ids[order[bi]]
+            dz = xyz[q, 2] - xyz[p, 2]
+            if dz > rc:
+                break
+            if (moved[q] > 0) == mp:
+                continue
+            dx = xyz[q, 0] - xyz[p, 0]
+            dy = xyz[q, 1] - xyz[p, 1]
+            r2 = dx * dx + dy * dy + dz * dz
+            if r2 <= P.rc2 and not _excluded(P, p, q):
+                e += _wca_pair(r2, P)
+                cnt += 1
+    return e, cnt
+
+
+@numba.njit(cache=True)
+def delta_kernel(pos, idx, new, moved, rigid, P, H, out, thr, ncon, dcon, flip, rinv, center,
+                 bonded):
     """Energy change (pN nm) when particles ``idx`` move to ``new``; per term into ``out``.
 
     ``moved[p]`` must hold the slot + 1 of every moved particle (0 for the others) and
@@ -431,9 +504,16 @@ def delta_kernel(pos, idx, new, moved, rigid, P, H, out, thr, ncon, dcon, flip, 
     smaller set): |R (p - c) - (q - c)| = |(p - c) - R^T (q - c)|, so the new pairs are the
     moved particles' old positions against the unmoved ones turned back by ``rinv`` = R^T.
 
+    ``bonded``: the moved particles whose bonds, hinges and twist joints are searched
+    (``idx`` itself in general; for a rigid move any subset holding every moved member of
+    each term that also has an unmoved member, e.g. the few particles next to a pivot; a
+    rigid move leaves the other terms unchanged). Per-particle terms (wall, pull) are
+    taken over all of ``idx``.
+
     Moves of more than ``_SWEEP_MIN`` particles take the WCA change as the difference of
-    the whole WCA energy after and before (:func:`_wca_sweep`; for a rigid move the moved
-    pairs cancel), without the early stop; ``flip`` is then not used.
+    the WCA energy after and before, without the early stop (``flip`` is then not used):
+    of every pair (:func:`_wca_sweep`), or for a rigid move of the moved-unmoved pairs
+    alone (:func:`_wca_cross`).
     """
     for t in range(out.shape[0]):
         out[t] = 0.0
@@ -441,6 +521,12 @@ def delta_kernel(pos, idx, new, moved, rigid, P, H, out, thr, ncon, dcon, flip, 
     m = idx.shape[0]
     for a in range(m):
         p = idx[a]
+        if P.has_wall and P.wall_on[p]:
+            out[3] += _wall_e(new[a, 2], P) - _wall_e(pos[p, 2], P)
+        if P.has_pull and P.share[p] != 0.0:
+            out[4] -= P.pull_f * P.share[p] * (new[a, 2] - pos[p, 2])
+    for a in range(bonded.shape[0]):
+        p = bonded[a]
         if P.has_bond:
             for t in range(P.b_ptr[p], P.b_ptr[p + 1]):
                 b = P.b_list[t]
@@ -489,12 +575,8 @@ def delta_kernel(pos, idx, new, moved, rigid, P, H, out, thr, ncon, dcon, flip, 
                              new[sk, 1] if sk >= 0 else pos[k, 1],
                              new[sk, 2] if sk >= 0 else pos[k, 2], P.kappa)
                 out[1] += e1 - e0
-        if P.has_wall and P.wall_on[p]:
-            out[3] += _wall_e(new[a, 2], P) - _wall_e(pos[p, 2], P)
-        if P.has_pull and P.share[p] != 0.0:
-            out[4] -= P.pull_f * P.share[p] * (new[a, 2] - pos[p, 2])
     if P.has_twist:
-        out[9] += _tw.twist_delta(pos, idx, new, moved, rigid, P)
+        out[9] += _tw.twist_delta(pos, bonded, new, moved, rigid, P)
     if P.has_plane:
         out[7] += _tw.plane_delta(pos, idx, new, moved, P)
     if P.has_trap and (moved[P.t_i] > 0 or moved[P.t_j] > 0):
@@ -510,9 +592,14 @@ def delta_kernel(pos, idx, new, moved, rigid, P, H, out, thr, ncon, dcon, flip, 
         out[11] += _sg.chiral_delta(pos, new, moved, rigid, P)
     if P.has_wca:
         if m > _SWEEP_MIN:
-            # a large moved set: the whole WCA energy before and after, by sweeps along z
-            e1, c1 = _wca_sweep(P, pos, new, moved, True)
-            e0, c0 = _wca_sweep(P, pos, new, moved, False)
+            # a large moved set: the WCA energy before and after by sweeps along z, of the
+            # moved-unmoved pairs only for a rigid move (the others are kept)
+            if rigid:
+                e1, c1 = _wca_cross(P, pos, new, moved, True)
+                e0, c0 = _wca_cross(P, pos, new, moved, False)
+            else:
+                e1, c1 = _wca_sweep(P, pos, new, moved, True)
+                e0, c0 = _wca_sweep(P, pos, new, moved, False)
             out[2] += e1 - e0
             dcon[0] += c1 - c0
             if _sum(out) > thr:
@@ -617,7 +704,7 @@ def _delta_once(pos, idx, new, P, out):
         H = hash_build(pos[:0], P.w_on[:0], 1.0)
     dcon = np.zeros(1, np.int64)
     return delta_kernel(pos, idx, new, moved, False, P, H, out, np.inf, 1, dcon, False,
-                  np.eye(3), np.zeros(3))
+                        np.eye(3), np.zeros(3), idx)
 
 
 # ------------------------------------------------------------------------ Monte Carlo
@@ -843,7 +930,7 @@ def run_chain_moves(pos, P, c_ptr, c_beads, c_fixed, mobile, cum, crank_max, cra
         # Metropolis: accept when dE <= 0 or u < exp(-dE / kT), i.e. dE < -kT ln u
         thr = -kT * math.log(uni[t, 5]) if uni[t, 5] > 0.0 else np.inf
         dE = delta_kernel(pos, idx[:m], new[:m], moved, kind < 2, P, H, dterm, thr, ncon, dcon,
-                    flip, rinv, center)
+                          flip, rinv, center, idx[:m])
         if math.isfinite(dE) and (dE <= 0.0 or dE < thr):
             ncon += dcon[0]
             stats[kind, 2] += 1

@@ -41,6 +41,18 @@ def _wrap(x):
     return x - tp * math.floor(x / tp)
 
 
+#: Marks an azimuth not yet computed in :func:`passage_free` (outside [-pi, pi]).
+_NO_ANGLE = 10.0
+
+
+@numba.njit(cache=True)
+def _azimuth(pos, p, cx, cy, cz, e1x, e1y, e1z, e2x, e2y, e2z):
+    x = pos[p, 0] - cx
+    y = pos[p, 1] - cy
+    z = pos[p, 2] - cz
+    return math.atan2(x * e2x + y * e2y + z * e2z, x * e1x + y * e1y + z * e1z)
+
+
 @numba.njit(cache=True)
 def passage_free(pos, beads, lo, hi, cx, cy, cz, ax, ay, az, theta, bmax, hb, rb, ab, order):
     """True when turning beads ``lo..hi`` of the strand ``beads`` by ``theta`` about the
@@ -78,7 +90,7 @@ def passage_free(pos, beads, lo, hi, cx, cy, cz, ax, ay, az, theta, bmax, hb, rb
         u = x * e1x + y * e1y + z * e1z
         v = x * e2x + y * e2y + z * e2z
         rb[k] = math.sqrt(u * u + v * v)
-        ab[k] = math.atan2(v, u)
+        ab[k] = _NO_ANGLE  # the azimuth, computed when a pair needs it
     # unmoved beads binned by distance from the axis (counting sort into ``order``)
     inv = 1.0 / bmax
     nbin = 1
@@ -109,6 +121,10 @@ def passage_free(pos, beads, lo, hi, cx, cy, cz, ax, ay, az, theta, bmax, hb, rb
             dh = hb[k] - hb[q]
             if dh * dh + dr * dr > b2:
                 continue
+            if ab[k] == _NO_ANGLE:
+                ab[k] = _azimuth(pos, beads[k], cx, cy, cz, e1x, e1y, e1z, e2x, e2y, e2z)
+            if ab[q] == _NO_ANGLE:
+                ab[q] = _azimuth(pos, beads[q], cx, cy, cz, e1x, e1y, e1z, e2x, e2y, e2z)
             d = ab[q] - ab[k]
             if _wrap(d - tlo) <= span:
                 cmax = 1.0
@@ -136,7 +152,7 @@ def passage_free(pos, beads, lo, hi, cx, cy, cz, ax, ay, az, theta, bmax, hb, rb
 @numba.njit(cache=True)
 def run_twist_moves(pos, P, beads, sides, morient, bnd, mobile, cum, crank_max, crank_angle,
                     pivot_angle, sweep_nm, crank_reach, reach_nm, bond_max_nm, frame_angle,
-                    frame_max, ball_nm, kT, uni, gau, stats, terms):
+                    frame_max, ball_nm, kT, uni, gau, stats, terms, span, cpos, lab):
     """Metropolis crankshaft, pivot, frame and particle moves of a torsionally constrained
     tether on ``pos`` (modified in place); see :mod:`dnabraid.run.twist_moves`.
 
@@ -148,7 +164,13 @@ def run_twist_moves(pos, P, beads, sides, morient, bnd, mobile, cum, crank_max, 
     and, when a bead travels more than ``sweep_nm``, is refused unless
     :func:`passage_free` (bonds up to ``bond_max_nm``); ``cum`` (4,) cumulative kind
     probabilities; ``stats`` (4, 3) attempted / refused / accepted per kind; ``terms``
-    (NTERMS,) the accepted change per term. Returns the sum of |dE| of accepted moves.
+    (NTERMS,) the accepted change per term; ``span``: the largest spread of a bonded
+    term's members in chain order (bead q at 2q, the side particle of bond q at 2q + 1, m
+    at 2N; -1: unknown), so that a pivot about bead k searches the bonds, hinges and
+    joints of the moved particles at 2k + 1 ... 2k + span alone (the others move with all
+    their partners), and of the moved particles in ``lab`` (the members of the clamps,
+    which the lab frame prices even when all of them move); ``cpos`` the chain order of
+    each particle. Returns the sum of |dE| of accepted moves.
     """
     nbd = beads.shape[0] - 1  # bonds N; attachment beads[N]
     att = beads[nbd]
@@ -163,6 +185,8 @@ def run_twist_moves(pos, P, beads, sides, morient, bnd, mobile, cum, crank_max, 
     rb = np.empty(nbe)
     ab = np.empty(nbe)
     order = np.empty(nbe, np.int64)
+    bl = np.empty(pos.shape[0], np.int64)
+    nbl = 0
     absum = 0.0
     for t in range(uni.shape[0]):
         r = uni[t, 0]
@@ -275,6 +299,27 @@ def run_twist_moves(pos, P, beads, sides, morient, bnd, mobile, cum, crank_max, 
                 idx[m] = morient
                 m += 1
                 moved[morient] = m
+            if span >= 0:
+                # the moved particles that share a bonded term with an unmoved one
+                nbl = 0
+                for k in range(k0 + 1, nbd + 1):
+                    if 2 * k > 2 * k0 + span:
+                        break
+                    bl[nbl] = beads[k]
+                    nbl += 1
+                for k in range(k0, nbd):
+                    if 2 * k + 1 > 2 * k0 + span:
+                        break
+                    bl[nbl] = sides[k]
+                    nbl += 1
+                if morient >= 0 and 2 * nbd <= 2 * k0 + span:
+                    bl[nbl] = morient
+                    nbl += 1
+                for a in range(lab.shape[0]):
+                    p = lab[a]
+                    if moved[p] > 0 and cpos[p] > 2 * k0 + span:
+                        bl[nbl] = p
+                        nbl += 1
             if n_on - m_on < m_on:
                 flip = True
                 rinv = _ch.rotation_matrix(gx / nrm, gy / nrm, gz / nrm, -theta)
@@ -343,8 +388,12 @@ def run_twist_moves(pos, P, beads, sides, morient, bnd, mobile, cum, crank_max, 
             m = 1
             moved[p] = 1
             rigid = False
-        dE = _ch.delta_kernel(pos, idx[:m], new[:m], moved, rigid, P, H, dterm, thr, ncon, dcon,
-                          flip, rinv, center)
+        if kind == 1 and span >= 0:
+            dE = _ch.delta_kernel(pos, idx[:m], new[:m], moved, rigid, P, H, dterm, thr, ncon,
+                                  dcon, flip, rinv, center, bl[:nbl])
+        else:
+            dE = _ch.delta_kernel(pos, idx[:m], new[:m], moved, rigid, P, H, dterm, thr, ncon,
+                                  dcon, flip, rinv, center, idx[:m])
         if math.isfinite(dE) and (dE <= 0.0 or dE < thr):
             ncon += dcon[0]
             stats[kind, 2] += 1

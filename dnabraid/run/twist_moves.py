@@ -95,6 +95,34 @@ REACH_NM = math.inf
 BOND_MAX_FACTOR = 1.2
 
 
+def bonded_span(P, chain, sides, orientation):
+    """What a pivot's energy change must search, for the compiled loop: the largest
+    spread, in chain order (bead q at 2q, the side particle of bond q at 2q + 1, the
+    orientation particle at 2N), of the members of any bond, hinge or twist joint of the
+    energy ``P`` (-1 if some member is none of these: every moved particle's terms are
+    then searched), each particle's chain order (int array, -1 elsewhere) and the members
+    of the clamps (joints to the lab frame, changed by a rotation of all their members)."""
+    at = {int(p): 2 * q for q, p in enumerate(chain)}
+    at.update({int(p): 2 * q + 1 for q, p in enumerate(sides)})
+    if orientation is not None and orientation >= 0:
+        at[int(orientation)] = 2 * (len(chain) - 1)
+    cpos = np.full(P.n, -1, np.int64)
+    for p, c in at.items():
+        cpos[p] = c
+    terms = [(P.b_i[b], P.b_j[b]) for b in range(len(P.b_i))]
+    terms += [(P.a_i[h], P.a_j[h], P.a_k[h]) for h in range(len(P.a_i))]
+    joints = [tuple(int(x) for x in P.j_p[j, :P.j_np[j]]) for j in range(len(P.j_type))]
+    lab = sorted({p for j, mem in enumerate(joints) if P.j_type[j] != 0 for p in mem})
+    span = 0
+    for members in terms + joints:
+        if any(int(p) not in at for p in members):
+            span = -1
+            break
+        c = [at[int(p)] for p in members]
+        span = max(span, max(c) - min(c))
+    return span, cpos, np.array(lab, np.int64)
+
+
 class PlectonemeMoves(ChainMoves):
     """Twist-aware Metropolis moves of a torsionally constrained tether (module
     docstring); the interface of :class:`~dnabraid.run.chain_moves.ChainMoves`
@@ -182,6 +210,7 @@ class PlectonemeMoves(ChainMoves):
         self._m = -1 if orientation is None else int(orientation)
         self._fixed = fixed
         self._bnd = None
+        self._span = -1
         self._mobile = None
         self.kinds = [k for k, x in zip(TWIST_KINDS, self.weights) if x > 0]
         self.stats = {k: MoveStats() for k in self.kinds}
@@ -217,6 +246,7 @@ class PlectonemeMoves(ChainMoves):
             raise ValueError("PlectonemeMoves: the System lacks interior twist joints of the "
                              "chain's frames")
         self._bnd = bnd
+        self._span, self._cpos, self._lab = bonded_span(P, c, s, m)
         parts = list(c) + list(s) + ([m] if m >= 0 else [])
         self._mobile = np.array([p for p in parts if int(p) not in self._fixed], np.int64)
         if self.bond_max_nm is None:
@@ -237,7 +267,8 @@ class PlectonemeMoves(ChainMoves):
                                 self.crank_angle, self.pivot_angle, self.sweep_nm,
                                 self.crank_reach_nm, self.reach_nm, self.bond_max_nm,
                                 self.frame_angle, self.frame_max, self.ball_nm, self.kT,
-                                uni, gau, self._stats, terms)
+                                uni, gau, self._stats, terms, self._span, self._cpos,
+                                self._lab)
         self._tally(before, TWIST_KINDS)
         return terms, float(absum)
 
