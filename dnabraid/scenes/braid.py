@@ -371,7 +371,8 @@ class Braid(TurnedScene):
         return [ob.Extension(att),
                 ob.BeadAngle((att[0], att[1]), self.trap_stiffness_pN_nm, self.turn_rate),
                 ob.TrapTorque(self.trap_stiffness_pN_nm), ob.Catenation(model.chains)] \
-            + self.strand_torque(model) + self.strand_distance(model)
+            + self.strand_torque(model) + self.spread_torque(model) \
+            + self.strand_distance(model)
 
     def strand_distance(self, model) -> list:
         """With the capsule contact: the strands' distance in the braid's middle and the
@@ -383,6 +384,14 @@ class Braid(TurnedScene):
 
         d = model.dna
         return [ob.StrandDistance(model.chains, ChiralKernel(d.diameter_nm, d.debye_nm))]
+
+    def spread_torque(self, model) -> list:
+        """The strands' torque on the top with the turn spread along them
+        (:class:`dnabraid.observables.SpreadTorque`: equal in mean to the trap torque, its
+        bonds' noise averaged along the braid), for every contact and alpha."""
+        att = model.attachments
+        return [ob.SpreadTorque(model, model.chains, [model.bead_center, att[0], att[1]],
+                                model.bead_center)]
 
     def strand_torque(self, model) -> list:
         """The strands' torque on the top (:class:`dnabraid.observables.StrandTorque`, the

@@ -231,6 +231,8 @@ class Plectoneme(TurnedScene):
                 ob.TrapTorque(self.trap_stiffness_pN_nm),
                 ob.TwistTorque(c, model.sides, m, self.twist_persistence_nm, model.dna.kT,
                                self.length_nm),
+                ob.SpreadTorque(model, [c], [model.attachments[0], m], model.attachments[0],
+                                sides=model.sides),
                 ob.TwistWrithe(c, model.sides, m), ob.Plectonemes(c)]
 
     def notes(self, model) -> list[str]:
