@@ -202,21 +202,32 @@ class StrandTorque(Observable):
                      "vertical (equal in mean to the trap torque)", digits=1)}
 
     def _turned(self, pos, th):
-        c = pos[self.center]
-        d = pos[self.top] - c
-        co, si = math.cos(th), math.sin(th)
-        out = d.copy()
-        out[:, 0] = co * d[:, 0] - si * d[:, 1]
-        out[:, 1] = si * d[:, 0] + co * d[:, 1]
-        return out + c
+        return _turn_about_z(pos, self.top, self.center, th)
 
     def __call__(self, pos, ctx, values):
-        pos = np.ascontiguousarray(pos, dtype=float)
-        h = self.STEP_RAD
-        up = self.le.delta_terms(pos, self.top, self._turned(pos, h))
-        dn = self.le.delta_terms(pos, self.top, self._turned(pos, -h))
-        d = sum(up[t] - dn[t] for t in up if t != "trap")
-        return {"torque_strands_pN_nm": d / (2 * h)}
+        return {"torque_strands_pN_nm": _dU_dtheta(self.le, pos, self.top, self._turned,
+                                                   self.STEP_RAD)}
+
+
+def _turn_about_z(pos, idx, axis, angle):
+    """Positions of particles ``idx`` turned by ``angle`` (rad; scalar or one per
+    particle) about the vertical through particle ``axis``."""
+    c = pos[axis]
+    d = pos[idx] - c
+    co, si = np.cos(angle), np.sin(angle)
+    out = d.copy()
+    out[:, 0] = co * d[:, 0] - si * d[:, 1]
+    out[:, 1] = si * d[:, 0] + co * d[:, 1]
+    return out + c
+
+
+def _dU_dtheta(le, pos, idx, turned, h):
+    """Central difference (step ``h`` rad) of every term but the trap for the map
+    ``turned(pos, theta)`` of particles ``idx`` (pN nm per rad)."""
+    pos = np.ascontiguousarray(pos, dtype=float)
+    up = le.delta_terms(pos, idx, turned(pos, h))
+    dn = le.delta_terms(pos, idx, turned(pos, -h))
+    return sum(up[t] - dn[t] for t in up if t != "trap") / (2 * h)
 
 
 class SpreadTorque(Observable):
@@ -268,22 +279,11 @@ class SpreadTorque(Observable):
                      "strands (equal in mean to the trap torque, lower variance)", digits=1)}
 
     def _turned(self, pos, th):
-        c = pos[self.axis]
-        d = pos[self.idx] - c
-        a = th * self.w
-        co, si = np.cos(a), np.sin(a)
-        out = d.copy()
-        out[:, 0] = co * d[:, 0] - si * d[:, 1]
-        out[:, 1] = si * d[:, 0] + co * d[:, 1]
-        return out + c
+        return _turn_about_z(pos, self.idx, self.axis, th * self.w)
 
     def __call__(self, pos, ctx, values):
-        pos = np.ascontiguousarray(pos, dtype=float)
-        h = self.STEP_RAD
-        up = self.le.delta_terms(pos, self.idx, self._turned(pos, h))
-        dn = self.le.delta_terms(pos, self.idx, self._turned(pos, -h))
-        d = sum(up[t] - dn[t] for t in up if t != "trap")
-        return {"torque_spread_pN_nm": d / (2 * h)}
+        return {"torque_spread_pN_nm": _dU_dtheta(self.le, pos, self.idx, self._turned,
+                                                  self.STEP_RAD)}
 
 
 class Catenation(Observable):
