@@ -388,12 +388,9 @@ def run_twist_moves(pos, P, beads, sides, morient, bnd, mobile, cum, crank_max, 
             m = 1
             moved[p] = 1
             rigid = False
-        if kind == 1 and span >= 0:
-            dE = _ch.delta_kernel(pos, idx[:m], new[:m], moved, rigid, P, H, dterm, thr, ncon,
-                                  dcon, flip, rinv, center, bl[:nbl])
-        else:
-            dE = _ch.delta_kernel(pos, idx[:m], new[:m], moved, rigid, P, H, dterm, thr, ncon,
-                                  dcon, flip, rinv, center, idx[:m])
+        bonded = bl[:nbl] if kind == 1 and span >= 0 else idx[:m]
+        dE = _ch.delta_kernel(pos, idx[:m], new[:m], moved, rigid, P, H, dterm, thr, ncon, dcon,
+                              flip, rinv, center, bonded)
         if math.isfinite(dE) and (dE <= 0.0 or dE < thr):
             ncon += dcon[0]
             stats[kind, 2] += 1
