@@ -18,6 +18,7 @@ from . import scenes as scn
 from .errors import UserError
 from .progress import progress_bar
 from .run.contract import ThermalContract
+from .run.engine import SimulationBlowUp
 from .run.workers import pin_to_core, usable_cores
 
 #: Errors that are the user's input, printed without a traceback (anything else is a bug).
@@ -179,6 +180,12 @@ def main(argv=None) -> int:
     except USER_ERRORS as exc:
         print(f"dnabraid: error: {exc}", file=sys.stderr)
         return 2
+    except SimulationBlowUp as exc:
+        # a run that stopped on a blow-up or a broken invariant: the message names the step,
+        # the term, the saved state and what to change; finished turn values stay on disk
+        print(f"dnabraid: simulation stopped: {exc}\nTurn values finished before "
+              "it are kept in the run directory.", file=sys.stderr)
+        return 3
     except BrokenPipeError:  # output piped into `head` and the like: not an error
         sys.stdout = open(os.devnull, "w")  # noqa: SIM115 - silence the interpreter's flush
         return 0

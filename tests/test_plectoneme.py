@@ -131,6 +131,54 @@ def test_torque_estimators_agree(twisted_run):
     assert "twist_torque_pN_nm" in summ["units"]
 
 
+def test_ramps_run_the_moves(twisted_run):
+    """The ramp to n = 1.5 gets the moves too: the point's move count is the number of report
+    intervals of ramp, equilibration and sampling times the moves per interval (until
+    2026-12-03 a ramp ran by Brownian dynamics alone; docs/validation.md 2.3i)."""
+    import json
+
+    s, out, summ = twisted_run
+    ri = s.report_interval
+    ramp = math.ceil(math.ceil(1.5 / s.turn_rate) / ri) * ri
+    pdir = os.path.join(out, "replicas", "r00", "points")
+    point = [f for f in sorted(os.listdir(pdir)) if "+001.5" in f][0]
+    with open(os.path.join(pdir, point, "moves.json")) as fh:
+        moves = json.load(fh)
+    attempted = sum(v["attempted"] for v in moves.values() if isinstance(v, dict))
+    intervals = (ramp + s.equilibration_steps + s.steps) // ri
+    assert attempted == intervals * s.mc_moves
+
+
+def test_ramp_checks_the_linking_number_and_names_the_turn_rate(tmp_path, monkeypatch):
+    """A passage during a ramp stops the run within the ramp, and the message names the
+    ramp's turn rate. The passage is simulated: the writhe jumps by one turn once the trap
+    is past 0.6 turns. Until 2026-12-03 the check ran only on sampled frames, after the
+    ramp and the equilibration, and blamed the time step (a 1-um plectoneme turned at 1e-3
+    turns/step)."""
+    from dnabraid import observables as ob
+    from dnabraid.run.engine import SimulationBlowUp
+
+    call = ob.TwistWrithe.__call__
+
+    def passed(self, pos, ctx, values):
+        v = call(self, pos, ctx, values)
+        return dict(v, writhe=v["writhe"] + (1.0 if ctx.trap_turns > 0.6 else 0.0))
+
+    monkeypatch.setattr(ob.TwistWrithe, "__call__", passed)
+    s = make_scene("plectoneme", {"length_nm": 60.0, "force_pN": 2.0, "turns": [1.5],
+                                  "steps": 2000, "equilibration_steps": 500,
+                                  "turn_rate": 1e-3, "frame_interval": 500, "seed": 3,
+                                  "replicas": 1, "workers": 1})
+    with pytest.raises(SimulationBlowUp) as exc:
+        s.run(str(tmp_path / "run"), platform="CPU", threads=1)
+    ramp_end = math.ceil(math.ceil(1.5 / 1e-3) / s.report_interval) * s.report_interval
+    assert exc.value.step <= ramp_end
+    msg = str(exc.value)
+    assert "changed its linking number" in msg
+    assert "while the trap turned from 0 to 1.5 turns at 0.001 turns/step" in msg
+    assert "try a smaller turn_rate" in msg
+
+
 def test_mdanalysis_twist_writhe_and_plectonemes(twisted_run):
     import MDAnalysis as mda
 

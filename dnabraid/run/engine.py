@@ -417,10 +417,12 @@ class Engine:
                 worst, fmax = name, m
         return worst, fmax
 
-    def blow_up(self, problem: str, good_state=None, fail_dir: str | None = None):
+    def blow_up(self, problem: str, good_state=None, fail_dir: str | None = None,
+                advice: str | None = None):
         """Raise :class:`SimulationBlowUp` naming the step, the term with the largest force
         (in the bad state, or, when that state is not finite, in the last good one) and
-        where the last good state was saved."""
+        where the last good state was saved; ``advice`` replaces the closing suggestion
+        (a smaller time step or a finer bead spacing) where the caller knows better."""
         term, fmax = self.largest_force_term()
         where = ""
         if not np.isfinite(fmax) and good_state is not None:
@@ -437,5 +439,6 @@ class Engine:
         msg = (f"simulation blew up at step {self.step}: {problem}; largest force{where} from "
                f"term '{term}' ({fmax:.3g} pN); time step {self.dt_ns * 1e3:.4g} ps. "
                + (f"Last good state saved to {saved}. " if saved else "")
-               + "Try a smaller timestep_safety or a finer bead spacing.")
+               + ("Try a smaller timestep_safety or a finer bead spacing." if advice is None
+                  else advice))
         raise SimulationBlowUp(msg, step=self.step, term=term, saved=saved)

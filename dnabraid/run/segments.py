@@ -14,8 +14,13 @@ exactly what the uninterrupted one did and ends with the same numbers (same plat
 Finished segments are skipped.
 
 A model with ``moves`` (:class:`dnabraid.run.moves.RigidMoves`) gets its Metropolis moves
-after every report interval of equilibration and sampling (each packed replica in its own
-frame); their counts go to ``moves.json`` in each point directory.
+after every report interval of the ramp, equilibration and sampling (each packed replica in
+its own frame); their counts go to ``moves.json`` in each point directory. A ramp also runs
+the invariant checks of the per-frame observables (a linking number, a catenation) every
+frame interval and at its end, and names its turn rate when one fails: until 2026-12-03 a
+ramp ran by Brownian dynamics alone and unchecked, and a 1-um plectoneme turned at 1e-3
+turns/step lost one turn of Lk there, reported only after equilibration as a time-step
+problem (docs/validation.md 2.3i).
 """
 
 from __future__ import annotations
@@ -215,14 +220,15 @@ def _run_members(engine, schedule, members, settings, ckdir, chk_path, *, progre
                 ob.reset(seg.start_turns, p)
         fail_dir = m0.out if len(members) == 1 else os.path.dirname(ckdir)
 
-        def observe(pos, every_frame, writers=None, split=split, ctxs=ctxs):
+        def observe(pos, every_frame, writers=None, advice=None, split=split, ctxs=ctxs):
             parts = split(pos)
             if check is not None:
                 check(parts)
             for m, c, p, w in zip(members, ctxs, parts, writers or [None] * len(members)):
                 values, msg = _observe(m.observables, p, c, every_frame)
                 if msg:
-                    engine.blow_up(msg if len(members) == 1 else f"{m.label}: {msg}")
+                    engine.blow_up(msg if len(members) == 1 else f"{m.label}: {msg}",
+                                   advice="" if advice and "turn_rate" in msg else advice)
                 if w is not None:
                     w.sample(engine.step, values)
                     if every_frame:
@@ -232,15 +238,21 @@ def _run_members(engine, schedule, members, settings, ckdir, chk_path, *, progre
             ws = [stack.enter_context(reporters.PointWriter(
                 p, m.model.topology, engine.dt_ns * 1e3, settings.frame_interval, sample_cols,
                 frame_cols, seg.turns)) for m, p in zip(members, pdirs)]
-            # 1. ramp the trap angle
+            # 1. ramp the trap angle, moves included, the per-frame checks every frame
+            # interval and at the end
             nramp = seg.ramp_steps // ri
+            if nramp:
+                rate = abs(seg.turns - seg.start_turns) / (nramp * ri)
+                ramp_advice = (f"This happened while the trap turned from {seg.start_turns:g} "
+                               f"to {seg.turns:g} turns at {rate:.3g} turns/step: try a "
+                               "smaller turn_rate.")
             for i in range(1, nramp + 1):
                 tt = seg.start_turns + (seg.turns - seg.start_turns) * i / nramp
                 engine.set_parameter(trap, TWO_PI * tt)
-                pos = engine.advance(ri, fail_dir)
+                pos = advance(ri, fail_dir)
                 for c in ctxs:
                     c.trap_turns = tt
-                observe(pos, False)
+                observe(pos, i % every == 0 or i == nramp, advice=ramp_advice)
                 progress(ri * len(members))
             if trap is not None:
                 engine.set_parameter(trap, TWO_PI * seg.turns)
