@@ -122,3 +122,36 @@ def test_spread_torque_mean_is_the_twist_torque_and_less_noisy_than_the_trap():
     K = sc.trap_stiffness_pN_nm
     assert abs(tr.std() / math.sqrt(K * m.dna.kT) - 1.0) < 0.1, tr.std()
     assert sp.std() < 0.25 * tr.std(), (sp.std(), tr.std())
+
+
+def test_torque_identity_flags_samples_that_are_not_boltzmann():
+    """The summary's identity check (``torque_identity_pN_nm``) on synthetic replicas: it
+    holds when the spread and trap torques share their mean and fails when the spread's
+    mean is off by ~6 standard errors of the difference; the table's foot says which.
+    This tests the statistic and its threshold (IDENTITY_P), not the physics: that the
+    identity holds for exact samples is the test above (moves alone, mean spread = mean
+    trap = twist torque)."""
+    import io
+
+    from dnabraid.scenes import make_scene
+    from dnabraid.scenes.tweezer_base import IDENTITY_P
+
+    rng = np.random.default_rng(7)
+    s = make_scene("braid", {"turns": [0.5]})
+
+    def reps(shift):
+        out = []
+        for _ in range(8):
+            trap = rng.normal(60.0, 290.0, 500)
+            spread = rng.normal(60.0 + shift, 60.0, 500)
+            out.append(({"torque_pN_nm": trap, "torque_spread_pN_nm": spread}, {}))
+        return out
+
+    ok, bad = s.torque_identity(reps(0.0)), s.torque_identity(reps(30.0))
+    # SEM of the difference ~ sqrt(290^2 + 60^2) / sqrt(4000) = 4.7 pN nm
+    assert ok["holds"] and ok["p"] >= IDENTITY_P and abs(ok["sem"] - 4.7) < 1.5
+    assert not bad["holds"] and bad["t"] > 4.0
+    buf = io.StringIO()
+    s.report_extra({"points": [{"turns": 0.5, "torque_identity_pN_nm": bad}]}, buf)
+    assert "VIOLATED at turns 0.5" in buf.getvalue()
+    assert s.torque_identity(reps(0.0)[:1]) is None  # one replica: no between-replica test

@@ -27,6 +27,10 @@ from .thermal import ThermalScene
 
 #: Largest number of DNA beads a tweezer scene may have (memory and time stay sane).
 MAX_BEADS = 20000
+#: Two-sided p-value below which the torque identity <spread torque> = <trap torque> counts
+#: as violated (Student t on the replicas' paired differences): one false alarm in 1000
+#: points.
+IDENTITY_P = 1e-3
 
 
 #: Help of the ``pack`` key (tweezer scenes and the catenane).
@@ -206,7 +210,33 @@ class TweezerScene(ThermalScene):
         pt = super().point_summary(segment, reps, columns)
         for c in ("extension_nm", "torque_pN_nm", "catenation", "bead_angle_turns"):
             pt.setdefault(c, {"mean": None, "sem": None})
+        ident = self.torque_identity(reps)
+        if ident is not None:
+            pt["torque_identity_pN_nm"] = ident
         return pt
+
+    def torque_identity(self, reps: list) -> dict | None:
+        """The exact identity <torque_spread> = <torque> (trap) checked on the replicas'
+        paired differences: the spread turn preserves volume, so the total energy's
+        derivative along it averages to zero in the Boltzmann distribution
+        (:class:`dnabraid.observables.SpreadTorque`). A violation means the samples are not
+        Boltzmann (the time step's bias, a point not equilibrated, or an energy term's
+        derivative wrong). Mean, SEM, t = mean / SEM, its two-sided p (n_replicas - 1
+        degrees of freedom) and ``holds`` (p >= :data:`IDENTITY_P`); None without both
+        columns or with one replica."""
+        s0 = reps[0][0]
+        if len(reps) < 2 or "torque_spread_pN_nm" not in s0 or "torque_pN_nm" not in s0:
+            return None
+        from scipy import stats
+
+        d = self.summarise([s["torque_spread_pN_nm"] - s["torque_pN_nm"] for s, _ in reps])
+        if d.get("mean") is None or not d.get("sem"):
+            return None
+        t = d["mean"] / d["sem"]
+        p = float(2 * stats.t.sf(abs(t), d["n_replicas"] - 1))
+        return {"mean": d["mean"], "sem": d["sem"], "t": float(t), "p": p,
+                "n_replicas": d["n_replicas"], "holds": p >= IDENTITY_P,
+                "what": "<torque_spread_pN_nm - torque_pN_nm>, 0 exactly for Boltzmann samples"}
 
     def finish_point(self, point: dict, stopped_by: str) -> None:
         point["precision"] = self.precision_verdict(point, stopped_by)
@@ -243,6 +273,18 @@ class TweezerScene(ThermalScene):
                 "stopped_by": stopped_by, "n_replicas": pt["n_replicas"]}
 
     def report_extra(self, summary: dict, file) -> None:
+        ids = [(pt, pt["torque_identity_pN_nm"]) for pt in summary["points"]
+               if "torque_identity_pN_nm" in pt]
+        if ids:
+            bad = [f"turns {pt['turns']:g} ({d['mean']:+.1f} +- {d['sem']:.1f} pN nm, "
+                   f"p = {d['p']:.1g})" for pt, d in ids if not d["holds"]]
+            if bad:
+                print("torque identity <spread> = <trap> VIOLATED at " + ", ".join(bad)
+                      + ": these samples are not Boltzmann (time step, equilibration)",
+                      file=file)
+            else:
+                print("torque identity <spread> = <trap> holds at every point (largest |t| "
+                      f"{max(abs(d['t']) for _, d in ids):.1f})", file=file)
         if self.has_targets():
             pr = summary["points"][0]["precision"]
             met = all(all(pt["precision"]["met"].values()) for pt in summary["points"])
