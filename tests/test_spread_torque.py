@@ -155,3 +155,17 @@ def test_torque_identity_flags_samples_that_are_not_boltzmann():
     s.report_extra({"points": [{"turns": 0.5, "torque_identity_pN_nm": bad}]}, buf)
     assert "VIOLATED at turns 0.5" in buf.getvalue()
     assert s.torque_identity(reps(0.0)[:1]) is None  # one replica: no between-replica test
+    # a point whose samples break the identity is not converged, and says why
+    from dnabraid.run.states import Segment
+
+    seg = Segment(0, None, 0.0, 0.5, 0, 0, 500)
+    cols = {"torque_pN_nm": ob.Column("pN nm", "trap", verdict=True),
+            "torque_spread_pN_nm": ob.Column("pN nm", "spread")}
+    r_good, r_bad = reps(0.0), reps(30.0)
+    for smp, frames in r_good + r_bad:
+        smp["step"] = np.arange(500)
+        frames["step"] = np.arange(0)
+    good = s.point_summary(seg, r_good, cols)
+    assert good["converged"], good["convergence_reason"]
+    bad = s.point_summary(seg, r_bad, cols)
+    assert not bad["converged"] and "torque identity" in bad["convergence_reason"]

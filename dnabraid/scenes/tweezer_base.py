@@ -213,6 +213,12 @@ class TweezerScene(ThermalScene):
         ident = self.torque_identity(reps)
         if ident is not None:
             pt["torque_identity_pN_nm"] = ident
+            if not ident["holds"]:  # samples that break an exact identity are not a result
+                why = (f"torque identity <spread> = <trap> violated ({ident['mean']:+.3g} +- "
+                       f"{ident['sem']:.2g} pN nm, p = {ident['p']:.2g})")
+                pt["converged"] = False
+                pt["convergence_reason"] = (why if pt["convergence_reason"] == "ok"
+                                            else f"{pt['convergence_reason']}; {why}")
         return pt
 
     def torque_identity(self, reps: list) -> dict | None:
