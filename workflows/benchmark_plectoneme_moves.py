@@ -43,7 +43,12 @@ from dnabraid.run.twist_moves import TWIST_KINDS, PlectonemeMoves
 from dnabraid.scenes import make_scene
 
 HERE = pathlib.Path(__file__).resolve().parent
-CASE = {"length_nm": 1000.0, "force_pN": 0.5, "turns": [0.0]}
+#: The case and the sampling its stored results were measured with (the plectoneme's
+#: defaults until 2026-12-04; since then the scene samples by 20 000 moves per 50 steps).
+MOVES = 500
+CASE = {"length_nm": 1000.0, "force_pN": 0.5, "turns": [0.0], "steps": 180000,
+        "equilibration_steps": 40000, "report_interval": 100, "frame_interval": 5000,
+        "turn_rate": 5e-5, "mc_moves": MOVES}
 
 
 def per_move(n=20000) -> list[str]:
@@ -169,16 +174,16 @@ def _row(seed, nm, out, ref, cpu=None) -> str:
 
 
 def runs(seeds, tmp, ref, existing=None) -> list[str]:
-    s0 = make_scene("plectoneme")
     lines = ["# 3. dnabraid run plectoneme --set length_nm=1000 --set force_pN=0.5 --set "
-             "'turns=[0]' (defaults otherwise), BD alone (mc_moves=0) vs BD + moves "
-             f"(mc_moves={s0.mc_moves}); dev = (extension - reference) / reference",
+             "'turns=[0]' (4 replicas x 1.8e5 + 4e4 steps, report_interval 100), BD alone "
+             f"(mc_moves=0) vs BD + moves (mc_moves={MOVES}); dev = (extension - reference) "
+             "/ reference",
              f"{'seed':>4} {'mc_moves':>8} {'verdict':>13} {'extension nm':>15} {'dev %':>6} "
              f"{'R-hat':>6} {'ESS':>6} {'wall s':>7} {'ESS/s':>8} {'cpu s':>7} "
              f"{'<Tw> turns':>13} {'torque pN nm':>13} {'<Tw^2> turns^2':>15} "
              f"{'acc c/p/f/p':>19} {'guard':>8}"]
     for seed in seeds:
-        for nm in (0, s0.mc_moves):
+        for nm in (0, MOVES):
             name = f"s{seed}_m{nm}"
             found = [os.path.join(dd, name) for dd in (existing or [])
                      if os.path.exists(os.path.join(dd, name, "summary.json"))]
@@ -209,7 +214,7 @@ def main(argv=None) -> int:
     ap.add_argument("--draws", type=int, default=6000)
     ap.add_argument("--out", default=str(HERE / "results" / "benchmark_plectoneme_moves.txt"))
     args = ap.parse_args(argv)
-    s = make_scene("plectoneme")
+    s = make_scene("plectoneme", CASE)
     stamp = datetime.datetime.now().strftime("%Y-%m-%d %H:%M")
     head = [f"# Twist-aware moves (dnabraid.run.twist_moves), {stamp}; {os.cpu_count()} cores "
             f"shared with other jobs (load average at start {os.getloadavg()[0]:.1f})",
@@ -222,7 +227,7 @@ def main(argv=None) -> int:
     ref_lines, ref = reference(n_draws=args.draws)
     lines += ref_lines + [""]
     if args.wait and args.runs:
-        names = [f"s{sd}_m{nm}" for sd in args.seeds for nm in (0, s.mc_moves)]
+        names = [f"s{sd}_m{nm}" for sd in args.seeds for nm in (0, MOVES)]
         while not all(any(os.path.exists(os.path.join(dd, n, "summary.json"))
                           for dd in args.runs) for n in names):
             time.sleep(10)

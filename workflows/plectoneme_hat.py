@@ -43,10 +43,13 @@ def main(argv=None):
     ap.add_argument("--seed", type=int, default=5)
     ap.add_argument("--replicas", type=int, default=None,
                     help="independent replicas per turn value (default: the scene's)")
-    ap.add_argument("--mc-moves", type=int, default=None,
-                    help="twist-aware moves per report interval (default: the scene's)")
+    # the sampling of the stored results (workflows/results/plectoneme_hat*.txt): the
+    # scene's defaults until 2026-12-04, before they became 20 000 moves per 50 steps
+    ap.add_argument("--mc-moves", type=int, default=500,
+                    help="twist-aware moves per report interval")
+    ap.add_argument("--report-interval", type=int, default=100, help="steps between samples")
     ap.add_argument("--protocol", default="independent", choices=("independent", "ramp"))
-    ap.add_argument("--turn-rate", type=float, default=None, help="turns per step of the ramp")
+    ap.add_argument("--turn-rate", type=float, default=5e-5, help="turns per step of the ramp")
     ap.add_argument("--frame-interval", type=int, default=2000)
     here = os.path.dirname(os.path.abspath(__file__))
     ap.add_argument("--run", default=None, help="run directory (default results/plectoneme_F..)")
@@ -60,7 +63,7 @@ def main(argv=None):
         "equilibration_steps": a.equilibration, "frame_interval": a.frame_interval,
         "seed": a.seed, "protocol": a.protocol,
         **({"replicas": a.replicas} if a.replicas else {}),
-        **({"mc_moves": a.mc_moves} if a.mc_moves is not None else {}),
+        "mc_moves": a.mc_moves, "report_interval": a.report_interval,
         **({"turn_rate": a.turn_rate} if a.turn_rate else {})})
     run = a.run or os.path.join(here, "results", f"plectoneme_F{a.force:g}_L{a.length:g}")
     if a.summary:

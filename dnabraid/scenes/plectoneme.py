@@ -56,18 +56,29 @@ FRAME_K_FRACTION = 0.05
 #: tangential stiffness K / arm^2 and its rate stay moderate.
 BEAD_ARM_NM = 20.0
 
-#: Default Metropolis move attempts per report interval
-#: (workflows/benchmark_plectoneme_moves.py).
-MC_MOVES = 500
+#: Default Metropolis move attempts per report interval (of REPORT_INTERVAL steps). Past
+#: buckling a move costs ~55x less than a Brownian step of the 300 nm molecule (8.5 us
+#: against 470 us) and the slow variable (the plectoneme's length) decorrelates in ~7e4
+#: moves, so the default samples mainly by moves: 400 moves per Brownian step
+#: (docs/validation.md 2.3l; before 2026-12-04: 500 moves per 100 steps, 5 per step).
+MC_MOVES = 20000
+#: Default sampling of the plectoneme scene (docs/validation.md 2.3l): a sample every 50
+#: steps (20 000 moves apart), 160 samples per replica and point after 2000 steps (800 000
+#: moves) of equilibration, and ramps at 5e-4 turns/step (with moves; 2.3h, 2.3j).
+REPORT_INTERVAL = 50
+STEPS = 8000
+EQUILIBRATION_STEPS = 2000
+FRAME_INTERVAL = 500
+TURN_RATE = 5e-4
 MC_MOVES_HELP = ("twist-aware Metropolis moves after every report interval (crankshaft, pivot, "
                  "frame and particle moves 1:6:1:1; dnabraid.run.twist_moves): the same "
-                 "equilibrium, sampled far faster. 1000 nm at 0.5 pN, n = 0, 4 replicas, "
-                 "default steps, seeds 1 and 3: 500 moves converge (797.1 +- 1.0 and 797.3 +- "
-                 "0.7 nm against the independent reference 799.1 +- 0.4 nm; R-hat 1.009, "
-                 "1.002; ESS 364, 694; 507 and 534 CPU s) where Brownian dynamics alone does "
-                 "not (R-hat 2.6, 3.0; ESS 5; 378 and 398 CPU s); ~25 us per move at 201 beads "
-                 "(workflows/results/benchmark_plectoneme_moves.txt). 0 = Brownian dynamics "
-                 "alone (physical kinetics; the moves' time correlations are not physical)")
+                 "equilibrium, sampled far faster. Default 20000 per 50 steps: the 300 nm "
+                 "molecule at 1 pN, n = 5, converges to 89.7 +- 0.9 nm against the moves-only "
+                 "reference 92.9 +- 1.4 nm (docs/validation.md 2.3l). Earlier, at 500 per 100 "
+                 "steps: 1000 nm at 0.5 pN, n = 0, converged (797.1 +- 1.0 nm against the "
+                 "independent reference 799.1 +- 0.4 nm) where Brownian dynamics alone did not "
+                 "(R-hat 2.6; ESS 5). 0 = Brownian dynamics alone (physical kinetics; the "
+                 "moves' time correlations are not physical)")
 
 
 @dataclasses.dataclass(frozen=True)
@@ -87,6 +98,17 @@ class Plectoneme(TurnedScene):
         "twist persistence length C of torsionally constrained DNA (Moroz & Nelson 1997, "
         "Bryant et al. 2003: C ~ 100 nm; twist-stretch coupling is left out)")
 
+    steps: int = key(STEPS, "steps", "sampling steps per turn value (after equilibration); "
+                     "with mc_moves moves after every report interval")
+    equilibration_steps: int = key(EQUILIBRATION_STEPS, "steps", "equilibration steps after "
+                                   "each change of turns (with moves)")
+    report_interval: int = key(REPORT_INTERVAL, "steps", "steps between observable samples "
+                               "(and between calls of the mc_moves moves)")
+    frame_interval: int = key(FRAME_INTERVAL, "steps", "steps between trajectory frames "
+                              "(multiple of report_interval)")
+    turn_rate: float = key(TURN_RATE, "turns/step", "speed at which the trap angle is ramped "
+                           "between turn values (moves run during the ramp; 3e-3 lost the "
+                           "linking number once, docs/validation.md 2.3j)")
     mc_moves: int = key(MC_MOVES, "", MC_MOVES_HELP)
     crank_angle_rad: float = key(1.0, "rad", "largest crankshaft angle (an arc of 1-12 beads "
                                  "and its frames turned about the line through its two "
