@@ -64,7 +64,7 @@ def main(argv=None):
         "seed": a.seed, "protocol": a.protocol,
         **({"replicas": a.replicas} if a.replicas else {}),
         "mc_moves": a.mc_moves, "report_interval": a.report_interval,
-        **({"turn_rate": a.turn_rate} if a.turn_rate else {})})
+        "turn_rate": a.turn_rate})
     run = a.run or os.path.join(here, "results", f"plectoneme_F{a.force:g}_L{a.length:g}")
     if a.summary:
         import json

@@ -17,7 +17,8 @@ halving (``workflows/timestep_bias.py``) cannot afford. Reported per chain: <z>,
 integrated autocorrelation time (samples of 500 moves), <Tw>, the twist torque
 2 pi <Tw> C kT / L and Tw + Wr at the end (must equal n: no strand passage); pooled: the
 mean of the chain means with its standard error across chains (chains are independent),
-split R-hat and bulk ESS over chains cut to the shortest.
+the chain means' chi^2/dof against their own errors, and split R-hat over the chains
+thinned by their tau and cut to the shortest.
 
     python workflows/plectoneme_mc_reference.py --turns 5 --seeds 1 2 3 4 --budget 200
     python workflows/plectoneme_mc_reference.py --turns 5 --compare RUN/summary.json
@@ -95,7 +96,7 @@ def chain(args) -> dict:
 
 
 def pooled(chains: list[dict]) -> dict:
-    from dnabraid.analysis.convergence import ess, split_rhat
+    from dnabraid.analysis.convergence import split_rhat
 
     n_turns = chains[0]["turns"]
     lost = [c["seed"] for c in chains if abs(c["lk_end"] - n_turns) > LK_TOL]
@@ -118,7 +119,6 @@ def pooled(chains: list[dict]) -> dict:
     if k > 1 and nmin >= 8:
         arr = np.array([t[:nmin] for t in thin])
         out["rhat"] = float(split_rhat(arr))
-        out["ess_thinned"] = float(ess(arr))
     return out
 
 

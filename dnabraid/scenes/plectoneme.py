@@ -58,8 +58,7 @@ BEAD_ARM_NM = 20.0
 
 #: Default Metropolis move attempts per report interval (of REPORT_INTERVAL steps). Past
 #: buckling a move costs ~55x less than a Brownian step of the 300 nm molecule (8.5 us
-#: against 470 us) and the slow variable (the plectoneme's length) decorrelates in ~7e4
-#: moves, so the default samples mainly by moves: 400 moves per Brownian step
+#: against 470 us), so the default samples mainly by moves: 400 moves per Brownian step
 #: (docs/validation.md 2.3l; before 2026-12-04: 500 moves per 100 steps, 5 per step).
 MC_MOVES = 20000
 #: Default sampling of the plectoneme scene (docs/validation.md 2.3l): a sample every 50
@@ -76,9 +75,9 @@ MC_MOVES_HELP = ("twist-aware Metropolis moves after every report interval (cran
                  "curve (300 nm, 1 pN, seed 1) converges at n = 0-3 and 5 in 1011 s (n = 3: "
                  "181.8 +- 1.8 nm against the moves-only reference 180.2 +- 0.4; n = 5: 89.5 "
                  "+- 1.1 against 92.8 +- 1.3, 1.97 SE below); n = 4 and 6 are NOT CONVERGED, "
-                 "and n = 5 at seeds 2-5 too (docs/validation.md 2.3l). Earlier, at "
-                 "500 per 100 "
-                 "steps: 1000 nm at 0.5 pN, n = 0, converged (797.1 +- 1.0 nm against the "
+                 "and n = 5 at seeds 2-5 too: past buckling the moves' own slow mode, the "
+                 "twist-writhe partition, limits (docs/validation.md 2.3l). Earlier, at 500 "
+                 "per 100 steps: 1000 nm at 0.5 pN, n = 0, converged (797.1 +- 1.0 nm against the "
                  "independent reference 799.1 +- 0.4 nm) where Brownian dynamics alone did not "
                  "(R-hat 2.6; ESS 5). 0 = Brownian dynamics alone (physical kinetics; the "
                  "moves' time correlations are not physical)")
