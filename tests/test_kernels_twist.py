@@ -137,10 +137,13 @@ def test_delta_equals_the_difference_of_two_openmm_energies(plect):
     assert all(v > 3 for v in changed.values()), changed
 
 
-def test_rigid_moves_in_the_loop_add_up_to_the_openmm_change(plect):
+@pytest.mark.parametrize("spread", [False, True])
+def test_rigid_moves_in_the_loop_add_up_to_the_openmm_change(plect, spread):
     """The compiled loop (rigid crankshafts and pivots, frame runs with their own two-joint
     difference, particle moves, the trap) summed over accepted moves equals OpenMM's
-    change, term by term, from a crumpled, twisted start."""
+    change, term by term, from a crumpled, twisted start; with ``twist_spread`` the
+    crankshafts and pivots also spin every frame (their energy change is then that of all
+    joints)."""
     from dnabraid.run.twist_moves import PlectonemeMoves
 
     m, le, eng = plect
@@ -149,7 +152,7 @@ def test_rigid_moves_in_the_loop_add_up_to_the_openmm_change(plect):
     rng = np.random.default_rng(3)
     pos = _random_conf(m, rng)
     mv = PlectonemeMoves(le, m.chains[0], m.sides, m.bead_orientation, m.fixed, m.dna.kT,
-                         moves_per_call=4000, sweep_nm=20.0, seed=5)
+                         moves_per_call=4000, sweep_nm=20.0, seed=5, twist_spread=spread)
     before = _terms(eng, m, pos)
     new, terms = mv.run(pos, 4000)
     after = _terms(eng, m, new)

@@ -124,11 +124,14 @@ def _reference(m, n_turns, K, n_draws=6000, batches=20, seed=2):
     return zs.mean(axis=0), zs.std(axis=0, ddof=1) / math.sqrt(batches)
 
 
-def test_trapped_moves_alone_partition_twist_and_writhe_exactly():
+@pytest.mark.parametrize("spread", [False, True])
+def test_trapped_moves_alone_partition_twist_and_writhe_exactly(spread):
+    """Moves alone (with and without ``twist_spread``) against exact free-chain draws
+    reweighted by the twist energy at fixed Lk: <z>, <Wr>, <Tw>."""
     n_turns = 0.3
     m = _model()
     K = 20000.0  # the scene's default trap
-    mv = PlectonemeMoves.for_model(m, moves_per_call=100, seed=5)
+    mv = PlectonemeMoves.for_model(m, moves_per_call=100, seed=5, twist_spread=spread)
     z, tw, wr, lk_err = _sample(m, mv, 2 * math.pi * n_turns, 5000, 80, 8000)
     (z_ref, wr_ref), (z_sem, wr_sem) = _reference(m, n_turns, K)
     _check(z, z_ref, z_sem)
@@ -140,13 +143,14 @@ def test_trapped_moves_alone_partition_twist_and_writhe_exactly():
     assert np.all(np.abs(lk_err) < 1e-6), np.abs(lk_err).max()
 
 
-def test_linking_number_is_kept_through_a_wound_chain():
+@pytest.mark.parametrize("spread", [False, True])
+def test_linking_number_is_kept_through_a_wound_chain(spread):
     """A longer chain wound 3 times at low force (the trap turned in small steps; writhe and
     contacts): over many rigid moves Tw + Wr keeps equal to the unwrapped bead angle
-    (continuous, never a whole-turn jump)."""
+    (continuous, never a whole-turn jump), with and without ``twist_spread``."""
     m = make_scene("plectoneme", {"length_nm": 150.0, "force_pN": 0.3, "turns": [0.0],
                                   "replicas": 1, "mc_moves": 0}).build()
-    mv = PlectonemeMoves.for_model(m, moves_per_call=200, seed=9)
+    mv = PlectonemeMoves.for_model(m, moves_per_call=200, seed=9, twist_spread=spread)
     c, s, mo = m.chains[0], m.sides, m.bead_orientation
     pos = m.positions
     unwrapped = 0.0

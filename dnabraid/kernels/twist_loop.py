@@ -11,12 +11,12 @@ import numba
 import numpy as np
 
 from . import chain as _ch
-from .twist import joint_energy
+from .twist import joint_energy, omega
 
 #: The index of the twist term in the per-term arrays (a compile-time constant).
 _I_TWIST = _ch.TERMS.index("twist")
 
-__all__ = ["passage_free", "run_twist_moves"]
+__all__ = ["passage_free", "run_twist_moves", "spread_spins"]
 
 
 # ------------------------------------------------------------------------ Monte Carlo
@@ -150,9 +150,92 @@ def passage_free(pos, beads, lo, hi, cx, cy, cz, ax, ay, az, theta, bmax, hb, rb
 
 
 @numba.njit(cache=True)
+def _wrap_pi(x):
+    """x mapped to [-pi, pi)."""
+    return x - 2.0 * math.pi * math.floor((x + math.pi) / (2.0 * math.pi))
+
+
+@numba.njit(cache=True)
+def _at(pos, new, moved, p, c):
+    s = moved[p]
+    return new[s - 1, c] if s > 0 else pos[p, c]
+
+
+@numba.njit(cache=True)
+def spread_spins(pos, new, moved, idx, m, P, beads, sides, bnd, ba, bb):
+    """Spin the frames of a rigid crankshaft or pivot (already in ``new``; ``m`` moved
+    particles) so that its twist is shared by all joints; returns the new count.
+
+    The rigid rotation changes the joint angles only at the two frame boundaries ``ba``
+    and ``bb`` (boundary b: the joint between the frames of bonds b - 1 and b; 0 the
+    surface clamp, N the bead clamp), by c_a and c_b, which depend on the beads alone
+    (spinning a frame about its own bond by psi adds psi to the joint after it and -psi to
+    the joint before it, for every joint type: parallel transport commutes with the spin).
+    Spinning the frame of bond q by psi_q = sum_{b <= q} (s_b - c_b), s_b = (c_a + c_b)
+    (1 / g_b) / sum (1 / g), changes joint b by s_b in all: the twist the rotation made is
+    shared in inverse proportion to the joints' stiffness (the least twist energy), and
+    psi_N = 0, so the bead's orientation particle is not turned. The map is its own
+    reverse with the opposite angle (the reverse rotation meets -c_a, -c_b, whatever the
+    spins: they commute) and, for given beads, a rotation of each side particle about its
+    bond: Jacobian 1, so the proposal stays symmetric."""
+    nbd = sides.shape[0]
+    ca = 0.0
+    cb = 0.0
+    if ba >= 0 and ba <= nbd and bnd[ba] >= 0:
+        ca = _wrap_pi(omega(pos, new, moved, P, bnd[ba], True)
+                      - omega(pos, new, moved, P, bnd[ba], False))
+    if bb >= 0 and bb <= nbd and bnd[bb] >= 0:
+        cb = _wrap_pi(omega(pos, new, moved, P, bnd[bb], True)
+                      - omega(pos, new, moved, P, bnd[bb], False))
+    d = ca + cb
+    winv = 0.0
+    for b in range(nbd + 1):
+        if bnd[b] >= 0:
+            winv += 1.0 / P.j_g[bnd[b]]
+    if winv == 0.0:
+        return m
+    psi = 0.0
+    R = np.empty((3, 3))
+    for q in range(nbd):
+        if bnd[q] >= 0:
+            psi += d / (P.j_g[bnd[q]] * winv)
+        if q == ba:
+            psi -= ca
+        if q == bb:
+            psi -= cb
+        if psi == 0.0:
+            continue
+        r0 = beads[q]
+        r1 = beads[q + 1]
+        x0 = _at(pos, new, moved, r0, 0)
+        y0 = _at(pos, new, moved, r0, 1)
+        z0 = _at(pos, new, moved, r0, 2)
+        ax = _at(pos, new, moved, r1, 0) - x0
+        ay = _at(pos, new, moved, r1, 1) - y0
+        az = _at(pos, new, moved, r1, 2) - z0
+        nrm = math.sqrt(ax * ax + ay * ay + az * az)
+        _axis_rot(R, ax / nrm, ay / nrm, az / nrm, math.cos(psi), math.sin(psi))
+        p = sides[q]
+        x = _at(pos, new, moved, p, 0) - x0
+        y = _at(pos, new, moved, p, 1) - y0
+        z = _at(pos, new, moved, p, 2) - z0
+        s = moved[p]
+        if s == 0:
+            idx[m] = p
+            m += 1
+            moved[p] = m
+            s = m
+        new[s - 1, 0] = R[0, 0] * x + R[0, 1] * y + R[0, 2] * z + x0
+        new[s - 1, 1] = R[1, 0] * x + R[1, 1] * y + R[1, 2] * z + y0
+        new[s - 1, 2] = R[2, 0] * x + R[2, 1] * y + R[2, 2] * z + z0
+    return m
+
+
+@numba.njit(cache=True)
 def run_twist_moves(pos, P, beads, sides, morient, bnd, mobile, cum, crank_max, crank_angle,
                     pivot_angle, sweep_nm, crank_reach, reach_nm, bond_max_nm, frame_angle,
-                    frame_max, ball_nm, kT, uni, gau, stats, terms, span, cpos, lab):
+                    frame_max, ball_nm, kT, uni, gau, stats, terms, span, cpos, lab,
+                    spread=False):
     """Metropolis crankshaft, pivot, frame and particle moves of a torsionally constrained
     tether on ``pos`` (modified in place); see :mod:`dnabraid.run.twist_moves`.
 
@@ -170,7 +253,9 @@ def run_twist_moves(pos, P, beads, sides, morient, bnd, mobile, cum, crank_max, 
     joints of the moved particles at 2k + 1 ... 2k + span alone (the others move with all
     their partners), and of the moved particles in ``lab`` (the members of the clamps,
     which the lab frame prices even when all of them move); ``cpos`` the chain order of
-    each particle. Returns the sum of |dE| of accepted moves.
+    each particle. ``spread``: crankshafts and pivots also spin the frames about their own
+    bonds so that the twist their rotation puts on the two pivot joints is shared by all the
+    joints of the chain (:func:`spread_spins`). Returns the sum of |dE| of accepted moves.
     """
     nbd = beads.shape[0] - 1  # bonds N; attachment beads[N]
     att = beads[nbd]
@@ -198,6 +283,9 @@ def run_twist_moves(pos, P, beads, sides, morient, bnd, mobile, cum, crank_max, 
         rigid = True
         m = 0
         thr = -kT * math.log(uni[t, 5]) if uni[t, 5] > 0.0 else np.inf
+        i = 0
+        j = 0
+        k0 = 0
         if kind == 0:
             # crankshaft: beads i..j (1 <= i <= j <= N-1) and the sides of bonds i-1..j
             # turned about the line through beads i-1 and j+1
@@ -299,7 +387,7 @@ def run_twist_moves(pos, P, beads, sides, morient, bnd, mobile, cum, crank_max, 
                 idx[m] = morient
                 m += 1
                 moved[morient] = m
-            if span >= 0:
+            if span >= 0 and not spread:
                 # the moved particles that share a bonded term with an unmoved one
                 nbl = 0
                 for k in range(k0 + 1, nbd + 1):
@@ -320,7 +408,7 @@ def run_twist_moves(pos, P, beads, sides, morient, bnd, mobile, cum, crank_max, 
                     if moved[p] > 0 and cpos[p] > 2 * k0 + span:
                         bl[nbl] = p
                         nbl += 1
-            if n_on - m_on < m_on:
+            if n_on - m_on < m_on and not spread:
                 flip = True
                 rinv = _ch.rotation_matrix(gx / nrm, gy / nrm, gz / nrm, -theta)
                 for c in range(3):
@@ -388,7 +476,15 @@ def run_twist_moves(pos, P, beads, sides, morient, bnd, mobile, cum, crank_max, 
             m = 1
             moved[p] = 1
             rigid = False
-        bonded = bl[:nbl] if kind == 1 and span >= 0 else idx[:m]
+        if spread and kind <= 1:
+            # crankshaft i..j or pivot about k0: the pivot boundaries' twist shared by all
+            m = spread_spins(pos, new, moved, idx, m, P, beads, sides, bnd,
+                             i - 1 if kind == 0 else k0, j + 1 if kind == 0 else nbd)
+            rigid = False
+            flip = False
+            bonded = idx[:m]
+        else:
+            bonded = bl[:nbl] if kind == 1 and span >= 0 else idx[:m]
         dE = _ch.delta_kernel(pos, idx[:m], new[:m], moved, rigid, P, H, dterm, thr, ncon, dcon,
                               flip, rinv, center, bonded)
         if math.isfinite(dE) and (dE <= 0.0 or dE < thr):

@@ -152,6 +152,12 @@ class PlectonemeMoves(ChainMoves):
         Bound of the distance a moved bead travels in a crankshaft or pivot (nm).
     weights : 4 floats
         Relative probabilities of crankshaft, pivot, frame and particle proposals.
+    twist_spread : bool
+        Crankshafts and pivots also spin every frame about its bond so that the twist
+        their rotation puts on the two pivot joints is shared by all joints in inverse
+        proportion to their stiffness (:func:`dnabraid.kernels.twist_loop.spread_spins`;
+        symmetric, Jacobian 1); False: the pivot joints take it (the moves before
+        2026-12-04).
     seed, guard_every, guard_rel, guard_abs_pN_nm
         As :class:`ChainMoves`'.
     """
@@ -162,7 +168,8 @@ class PlectonemeMoves(ChainMoves):
                  ball_nm: float = 0.3, crank_max_beads: int = 12, frame_max: int = 40,
                  sweep_nm: float = SWEEP_NM, crank_reach_nm: float = SWEEP_NM,
                  reach_nm: float = REACH_NM,
-                 bond_max_nm: float | None = None, weights=(1.0, 6.0, 1.0, 1.0), seed: int = 1,
+                 bond_max_nm: float | None = None, weights=(1.0, 6.0, 1.0, 1.0),
+                 twist_spread: bool = False, seed: int = 1,
                  guard_every: int = 100, guard_rel: float = GUARD_REL,
                  guard_abs_pN_nm: float = GUARD_ABS_PN_NM):
         if moves_per_call < 1:
@@ -198,6 +205,7 @@ class PlectonemeMoves(ChainMoves):
         self.reach_nm = float(reach_nm)
         self.crank_reach_nm = float(crank_reach_nm)
         self.bond_max_nm = None if bond_max_nm is None else float(bond_max_nm)
+        self.twist_spread = bool(twist_spread)
         self.weights = w / w.sum()
         self._cum = np.cumsum(self.weights)
         self._cum[-1] = 1.0 + 1e-12
@@ -268,7 +276,7 @@ class PlectonemeMoves(ChainMoves):
                                 self.crank_reach_nm, self.reach_nm, self.bond_max_nm,
                                 self.frame_angle, self.frame_max, self.ball_nm, self.kT,
                                 uni, gau, self._stats, terms, self._span, self._cpos,
-                                self._lab)
+                                self._lab, self.twist_spread)
         self._tally(before, TWIST_KINDS)
         return terms, float(absum)
 
@@ -281,6 +289,7 @@ class PlectonemeMoves(ChainMoves):
                 "reach_nm": self.reach_nm if math.isfinite(self.reach_nm) else None,
                 "crank_reach_nm": self.crank_reach_nm,
                 "bond_max_nm": self.bond_max_nm, "moves_per_call": self.moves_per_call,
+                "twist_spread": self.twist_spread,
                 "guard_checks": self.guard_checks,
                 "guard_max_diff_pN_nm": self.guard_max_diff,
                 **{k: v.to_dict() for k, v in self.stats.items()}}

@@ -127,6 +127,10 @@ class Plectoneme(TurnedScene):
                           "pivot: keeps strands from passing through each other (the linking "
                           "number); <= 3 nm keeps any passage behind a > 50 kT excluded-volume "
                           "barrier at the default diameter")
+    twist_spread: bool = key(False, "", "crankshafts and pivots also spin the frames so "
+                             "that the twist their rotation puts on the two pivot joints is "
+                             "shared by all joints of the arc in inverse proportion to their "
+                             "stiffness (docs/validation.md 2.3m); false: the two joints take it")
 
     def validate(self) -> None:
         super().validate()
@@ -212,7 +216,7 @@ class Plectoneme(TurnedScene):
                                         pivot_angle_rad=self.pivot_angle_rad,
                                         frame_angle_rad=self.frame_angle_rad,
                                         ball_nm=self.bead_move_nm, sweep_nm=self.sweep_nm,
-                                        seed=self.seed)
+                                        twist_spread=self.twist_spread, seed=self.seed)
         return {"zeta_attach_pN_ns_per_nm": zeta_attach,
                 "zeta_center_pN_ns_per_nm": zeta_attach,
                 "zeta_bead_physical_pN_ns_per_nm": zeta_phys,
