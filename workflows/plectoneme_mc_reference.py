@@ -50,7 +50,7 @@ LK_TOL = 0.05
 
 
 def chain(args) -> dict:
-    n_turns, length, force, seed, budget = args
+    n_turns, length, force, seed, budget, spread = args
     from dnabraid.analysis.stats import integrated_autocorrelation_time
     from dnabraid.geometry.ribbon import tether_twist, writhe_open
     from dnabraid.run.twist_moves import PlectonemeMoves
@@ -64,7 +64,8 @@ def chain(args) -> dict:
                                    crank_angle_rad=s.crank_angle_rad,
                                    pivot_angle_rad=s.pivot_angle_rad,
                                    frame_angle_rad=s.frame_angle_rad,
-                                   ball_nm=s.bead_move_nm, sweep_nm=s.sweep_nm)
+                                   ball_nm=s.bead_move_nm, sweep_nm=s.sweep_nm,
+                                   twist_spread=spread)
     pos = np.array(m.positions)
     t_start = time.process_time()
     for k in range(RAMP_STAGES + 1):
@@ -84,11 +85,16 @@ def chain(args) -> dict:
     z = np.array(z)
     tau, _ = integrated_autocorrelation_time(z)
     tw_mean = float(np.mean(tw))
+    tau_tw, _ = integrated_autocorrelation_time(np.asarray(tw))
     return {"turns": n_turns, "seed": seed, "samples": len(z), "moves": len(z) * SAMPLE_MOVES,
             "cpu_s": cpu, "cpu_ramp_eq_s": t_eq, "z_mean": float(z.mean()),
             "z_sd": float(z.std()), "tau_samples": float(tau),
             "z_sem": float(z.std() * math.sqrt(tau / len(z))),
             "tw_mean": tw_mean, "wr_mean": float(np.mean(wr)),
+            # Tw's own time in samples of 5000 moves: the twist-writhe partition is the
+            # slow mode past buckling (docs/validation.md 2.3l)
+            "tau_tw_samples": float(tau_tw), "twist_spread": bool(spread),
+            "us_per_move": 1e6 * cpu / (len(z) * SAMPLE_MOVES),
             "twist_torque_pN_nm": 2 * math.pi * tw_mean * s.twist_persistence_nm * m.dna.kT
             / length,
             "lk_end": float(tw[-1] + wr[-1]),
@@ -124,18 +130,22 @@ def pooled(chains: list[dict]) -> dict:
 
 def table(store: dict) -> list[str]:
     lines = [f"# moves-only reference (workflows/plectoneme_mc_reference.py): plectoneme "
-             f"L = {store['length_nm']} nm, F = {store['force_pN']} pN, default moves; "
+             f"L = {store['length_nm']} nm, F = {store['force_pN']} pN, default moves"
+             + (" with twist_spread" if store.get("twist_spread") else "") + "; "
              "z in nm, tau in samples of 500 moves (Sokal), a chain's +- from that tau "
-             "(too small where the chain has a slower mode: see chi2/dof), torque in pN nm",
+             "(too small where the chain has a slower mode: see chi2/dof), torque in pN nm; "
+             "tau Tw in samples of 5000 moves (- where not stored)",
              f"{'turns':>5} {'seed':>4} {'moves':>9} {'cpu s':>6} {'<z>':>7} {'+-':>5} "
-             f"{'tau':>6} {'<Tw>':>7} {'torque':>7} {'Lk end':>7}"]
+             f"{'tau':>6} {'<Tw>':>7} {'torque':>7} {'Lk end':>7} {'tau Tw':>6}"]
     for key in sorted(store["points"], key=float):
         pt = store["points"][key]
         for c in sorted(pt["chains"], key=lambda c: c["seed"]):
             lines.append(f"{float(key):5g} {c['seed']:4d} {c['moves']:9.2e} {c['cpu_s']:6.0f} "
                          f"{c['z_mean']:7.2f} {c['z_sem']:5.2f} {c['tau_samples']:6.1f} "
                          f"{c['tw_mean']:7.4f} {c['twist_torque_pN_nm']:7.2f} "
-                         f"{c['lk_end']:7.3f}")
+                         f"{c['lk_end']:7.3f} "
+                         + (f"{c['tau_tw_samples']:6.1f}" if "tau_tw_samples" in c
+                            else f"{'-':>6}"))
         p = pooled(pt["chains"])
         extra = (f", split R-hat {p['rhat']:.3f} (thinned chains)" if "rhat" in p else "")
         if p["lk_lost_seeds"]:
@@ -186,10 +196,15 @@ def main(argv=None) -> int:
     ap.add_argument("--compare", default=None,
                     help="a finished run's summary.json: its points against the reference")
     ap.add_argument("--out", default=None)
+    ap.add_argument("--twist-spread", action="store_true",
+                    help="moves with twist_spread (docs/validation.md 2.3m); stored apart "
+                         "(file name ends in _spread)")
     a = ap.parse_args(argv)
     base = a.out or os.path.join(HERE, "results",
-                                 f"plectoneme_mc_reference_L{a.length:g}_F{a.force:g}")
-    store = {"length_nm": a.length, "force_pN": a.force, "points": {}}
+                                 f"plectoneme_mc_reference_L{a.length:g}_F{a.force:g}"
+                                 + ("_spread" if a.twist_spread else ""))
+    store = {"length_nm": a.length, "force_pN": a.force, "points": {},
+             "twist_spread": a.twist_spread}
     if os.path.exists(base + ".json"):
         with open(base + ".json") as fh:
             store = json.load(fh)
@@ -199,7 +214,8 @@ def main(argv=None) -> int:
         with open(base + "_compare.txt", "a") as fh:
             fh.write("\n".join(lines) + "\n\n")
         return 0
-    jobs = [(n, a.length, a.force, sd, a.budget) for n in a.turns for sd in a.seeds]
+    jobs = [(n, a.length, a.force, sd, a.budget, a.twist_spread)
+            for n in a.turns for sd in a.seeds]
     workers = a.workers or os.cpu_count() or 1
     done = 0
     with mp.get_context("spawn").Pool(min(workers, len(jobs))) as pool:
