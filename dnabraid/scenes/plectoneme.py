@@ -129,7 +129,7 @@ class Plectoneme(TurnedScene):
                           "barrier at the default diameter")
     twist_spread: bool = key(False, "", "crankshafts and pivots also spin the frames so "
                              "that the twist their rotation puts on the two pivot joints is "
-                             "shared by all joints of the arc in inverse proportion to their "
+                             "shared by all joints of the chain in inverse proportion to their "
                              "stiffness (docs/validation.md 2.3m); false: the two joints take it")
 
     def validate(self) -> None:
