@@ -7,7 +7,8 @@ swap is refused: the trap holds the bead's angle within ~sqrt(kT / K) = 0.014 ra
 script measures the acceptance of a swap that maps the configurations: replica j (angle
 theta_i + D) receives T_D(x_i), replica i receives T_-D(x_j), where T_D turns the bead's
 orientation particle by D about the vertical through its attachment and spins the frame of
-bond q about its bond by D (q + 1/2) / N (a rotation of each moved particle: Jacobian 1,
+bond q about its bond by s D (q + 1/2) / N (s = +1: the frames turn with the bead; s = -1
+reported as the control that must fail) (a rotation of each moved particle: Jacobian 1,
 T_-D its inverse), so the twist the swap adds is spread along the chain. Acceptance:
 min(1, exp(-[U_j(T_D x_i) - U_i(x_i) + U_i(T_-D x_j) - U_j(x_j)] / kT)), energies from the
 scene's own LocalEnergy (all terms).
@@ -112,21 +113,13 @@ def main(argv=None) -> int:
     s, m, mv = _scene(a.turns, a.length, a.force, a.seed)
     c, sides, mo = np.asarray(m.chains[0]), np.asarray(m.sides), int(m.bead_orientation)
     kT = m.dna.kT
-    x0 = res[0]["samples"][-1]
 
     def tw(p):
         return tether_twist(p[c], p[sides], p[mo] - p[c[-1]])
 
-    # the spin's sign that turns the frames with the bead (a fixed convention, found once on
-    # the last sample at theta_0: the wrong sign leaves the clamp joint twisted by 2 D, and
-    # its twist-energy change is the larger one)
-    mv.energy.set_trap_angle(th0 + 0.05)
-    du = {sg: mv.energy.total_terms(swap_map(x0, c, sides, mo, 0.05, sg))["twist"]
-          for sg in (1.0, -1.0)}
-    sign = 1.0 if du[1.0] < du[-1.0] else -1.0
     rows = []
     base = res[0]
-    for d, r in zip(a.deltas, res[1:]):
+    for sign, d, r in [(sg, d, r) for sg in (1.0, -1.0) for d, r in zip(a.deltas, res[1:])]:
         n = min(len(base["samples"]), len(r["samples"]))
         acc, dtw = [], []
         for k in range(n):
@@ -143,24 +136,25 @@ def main(argv=None) -> int:
         # replicas from n = 3 to n at this spacing; a swap ladder of K rungs at acceptance p
         # is a random walk that needs ~K^2 / p attempted swaps per round trip
         rungs = int(math.ceil(2 * math.pi * (a.turns - 3) / d)) + 1
-        rows.append({"delta_rad": d, "pairs": n, "acceptance": p,
+        rows.append({"spin_sign": sign, "delta_rad": d, "pairs": n, "acceptance": p,
                      "acceptance_sem": float(acc.std(ddof=1) / math.sqrt(n)) if n > 1 else math.nan,
                      "mean_dTw_between_chains": float(np.mean(dtw)),
                      "rungs_from_n3": rungs, "cpu_s": r["cpu_s"]})
     lines = [f"# swap acceptance of mapped replica exchange (workflows/lk_exchange.py): "
              f"plectoneme L = {a.length} nm, F = {a.force} pN, n = {a.turns}; {a.budget} CPU s "
-             f"per chain, samples every {SAMPLE_MOVES} moves; spin sign {sign:+.0f}",
-             f"{'D (rad)':>8} {'pairs':>6} {'acceptance':>18} {'<Tw_j - Tw_i>':>14} "
+             f"per chain, samples every {SAMPLE_MOVES} moves; spin sign +1: the frames turn "
+             "with the bead (right-handed about the bond pointing up, as the bead about +z)",
+             f"{'sign':>4} {'D (rad)':>8} {'pairs':>6} {'acceptance':>18} {'<Tw_j - Tw_i>':>14} "
              f"{'rungs n=3..':>12}"]
     for r in rows:
-        lines.append(f"{r['delta_rad']:8.2f} {r['pairs']:6d} {r['acceptance']:10.4f} +- "
+        lines.append(f"{r['spin_sign']:+4.0f} {r['delta_rad']:8.2f} {r['pairs']:6d} {r['acceptance']:10.4f} +- "
                      f"{r['acceptance_sem']:.4f} {r['mean_dTw_between_chains']:14.4f} "
                      f"{r['rungs_from_n3']:12d}")
     print("\n".join(lines))
     out = os.path.join(HERE, "results", f"lk_exchange_L{a.length:g}_F{a.force:g}_n{a.turns:g}")
     with open(out + ".json", "w") as fh:
         json.dump({"length_nm": a.length, "force_pN": a.force, "turns": a.turns,
-                   "sign": sign, "rows": rows}, fh, indent=1)
+                   "rows": rows}, fh, indent=1)
     with open(out + ".txt", "w") as fh:
         fh.write("\n".join(lines) + "\n")
     return 0

@@ -1,0 +1,191 @@
+"""Replica exchange over the trap angle for the plectoneme past buckling: a prototype run.
+
+One ladder of moves-only chains (the scene's own moves and energy, as in
+``plectoneme_mc_reference.py``) at trap angles theta_k = 2 pi n_low + k D, D = 2 pi / per_turn,
+up to 2 pi n_high, so the integer turns sit on rungs. Each rung's chain is ramped from 0 to
+theta_k (400 stages) from the seed's exact WLC start and equilibrated; then rounds of
+``--round-moves`` moves per rung alternate with swap attempts between neighbouring rungs
+(even pairs, then odd), each swap mapped so that the bead's turn is spread over the frames
+(:func:`lk_exchange.swap_map`; acceptance on the full energy, detailed balance kept: the
+map is volume-preserving and T_-D is its inverse). Below buckling the moves mix well, so
+states mixed at n_low climb the ladder; the slow tail-plectoneme exchange at n_high is
+bypassed.
+
+Reported per rung: <z>, its error from batch means (``--batches`` of the sampling rounds;
+a lower bound where a batch is shorter than the rung's slow mode), <Tw>, the swap
+acceptance to the next rung, and the number of ladder round trips (a replica that went from
+the lowest rung to the highest and back). Integer turns are compared with the stored
+moves-only reference (``plectoneme_mc_reference_L<L>_F<F>.json``), where present.
+
+    python workflows/lk_ladder.py --seeds 1 2 --budget 1200
+
+Writes ``workflows/results/lk_ladder_L<L>_F<F>.{json,txt}`` (a seed's ladder replaced on a
+rerun).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import multiprocessing as mp
+import os
+import sys
+import time
+
+import numpy as np
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+sys.path.insert(0, HERE)
+RAMP_STAGES, RAMP_MOVES = 400, 2000
+EQ_MOVES = 200_000
+
+
+def ladder(args) -> dict:
+    import lk_exchange as lx
+    from dnabraid.geometry.ribbon import tether_twist
+
+    n_low, n_high, per_turn, length, force, seed, budget, round_moves, batches = args
+    d = 2 * math.pi / per_turn
+    thetas = [2 * math.pi * n_low + k * d for k in range(int(round((n_high - n_low) * per_turn)) + 1)]
+    K = len(thetas)
+    s, m, mv = lx._scene(n_high, length, force, seed)
+    c, sides, mo = np.asarray(m.chains[0]), np.asarray(m.sides), int(m.bead_orientation)
+    kT = m.dna.kT
+    start = np.array(m.positions)
+    t0 = time.process_time()
+    pos = []
+    for th in thetas:
+        p = start.copy()
+        for k in range(RAMP_STAGES + 1):
+            mv.energy.set_trap_angle(th * k / RAMP_STAGES)
+            p, _ = mv.run(p, RAMP_MOVES)
+        p, _ = mv.run(p, EQ_MOVES)
+        pos.append(p)
+    t_ramp = time.process_time() - t0
+    sign = 1.0  # the frames turn with the bead (lk_exchange.py measures both)
+    who = list(range(K))  # replica id on each rung
+    going_up = [None] * K  # per replica: True once it touched rung 0, False after the top
+    trips = 0
+    tries = np.zeros(K - 1)
+    accs = np.zeros(K - 1)
+    z, tw = [], []
+    rng = np.random.default_rng(1000 + seed)
+    t1 = time.process_time()
+    r = 0
+    while time.process_time() - t1 < budget:
+        for k in range(K):
+            mv.energy.set_trap_angle(thetas[k])
+            pos[k], _ = mv.run(pos[k], round_moves)
+        for k in range(r % 2, K - 1, 2):
+            xi, xj = pos[k], pos[k + 1]
+            mv.energy.set_trap_angle(thetas[k])
+            ui = mv.energy.total(xi)
+            yi = lx.swap_map(xj, c, sides, mo, -d, sign)
+            ui_new = mv.energy.total(yi)
+            mv.energy.set_trap_angle(thetas[k + 1])
+            uj = mv.energy.total(xj)
+            yj = lx.swap_map(xi, c, sides, mo, d, sign)
+            uj_new = mv.energy.total(yj)
+            de = (uj_new - ui + ui_new - uj) / kT
+            tries[k] += 1
+            if de <= 0 or rng.random() < math.exp(-de):
+                accs[k] += 1
+                pos[k], pos[k + 1] = yi, yj
+                who[k], who[k + 1] = who[k + 1], who[k]
+        for k in (0, K - 1):
+            rid = who[k]
+            if k == 0:
+                if going_up[rid] is False:
+                    trips += 1
+                going_up[rid] = True
+            elif going_up[rid] is True:
+                going_up[rid] = False
+        z.append([float(p[c[-1], 2] - p[c[0], 2]) for p in pos])
+        if r % 5 == 0:
+            tw.append([tether_twist(p[c], p[sides], p[mo] - p[c[-1]]) for p in pos])
+        r += 1
+    cpu = time.process_time() - t1
+    from dnabraid.geometry.ribbon import writhe_open
+    # Tw + Wr on each rung at the end must equal its turns (no strand passage, no slip)
+    lk_end = [tether_twist(p[c], p[sides], p[mo] - p[c[-1]]) + writhe_open(p[c]) for p in pos]
+    z = np.array(z)
+    nb = len(z) // batches
+    bm = z[:nb * batches].reshape(batches, nb, K).mean(axis=1)
+    return {"seed": seed, "thetas": thetas, "turns": [th / (2 * math.pi) for th in thetas],
+            "rounds": r, "round_moves": round_moves, "cpu_s": cpu, "cpu_ramp_eq_s": t_ramp,
+            "z_mean": z.mean(axis=0).tolist(),
+            "z_sem_batches": (bm.std(axis=0, ddof=1) / math.sqrt(batches)).tolist(),
+            "tw_mean": np.array(tw).mean(axis=0).tolist(),
+            "acceptance": (accs / np.maximum(tries, 1)).tolist(), "round_trips": trips,
+            "lk_end": lk_end,
+            "sign": sign, "us_per_move": 1e6 * cpu / (r * round_moves * K)}
+
+
+def table(store: dict, ref: dict | None) -> list[str]:
+    lines = [f"# replica-exchange ladder over the trap angle (workflows/lk_ladder.py): "
+             f"plectoneme L = {store['length_nm']} nm, F = {store['force_pN']} pN; z in nm, "
+             "+- from batch means (a lower bound if a batch is shorter than the slow mode); "
+             "acc: swap acceptance to the next rung; reference: moves-only chains (2.3l)"]
+    for lad in sorted(store["ladders"], key=lambda x: x["seed"]):
+        lines.append(f"seed {lad['seed']}: {len(lad['turns'])} rungs, {lad['rounds']} rounds of "
+                     f"{lad['round_moves']} moves per rung, {lad['cpu_s']:.0f} CPU s sampling "
+                     f"(+{lad['cpu_ramp_eq_s']:.0f} ramp), {lad['us_per_move']:.1f} us/move, "
+                     f"{lad['round_trips']} round trips")
+        lines.append(f"{'n':>6} {'<z>':>8} {'+-':>5} {'<Tw>':>7} {'acc':>5} {'Lk end':>7} "
+                     f"{'reference':>15}")
+        for k, n in enumerate(lad["turns"]):
+            acc = f"{lad['acceptance'][k]:5.2f}" if k < len(lad["acceptance"]) else f"{'':5}"
+            rf = ""
+            key = f"{n:g}"
+            if ref and abs(n - round(n)) < 1e-9 and key in ref:
+                rf = f"{ref[key][0]:8.2f} +-{ref[key][1]:4.2f}"
+            lines.append(f"{n:6.3f} {lad['z_mean'][k]:8.2f} {lad['z_sem_batches'][k]:5.2f} "
+                         f"{lad['tw_mean'][k]:7.4f} {acc} {lad['lk_end'][k]:7.3f} {rf:>15}")
+    return lines
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--n-low", type=float, default=3.0)
+    ap.add_argument("--n-high", type=float, default=6.0)
+    ap.add_argument("--per-turn", type=int, default=6, help="rungs per turn (D = 2 pi / this)")
+    ap.add_argument("--length", type=float, default=300.0, help="nm")
+    ap.add_argument("--force", type=float, default=1.0, help="pN")
+    ap.add_argument("--seeds", type=int, nargs="+", default=[1, 2])
+    ap.add_argument("--budget", type=float, default=1200.0, help="CPU s of sampling per ladder")
+    ap.add_argument("--round-moves", type=int, default=1000)
+    ap.add_argument("--batches", type=int, default=10)
+    a = ap.parse_args(argv)
+    base = os.path.join(HERE, "results", f"lk_ladder_L{a.length:g}_F{a.force:g}")
+    store = {"length_nm": a.length, "force_pN": a.force, "ladders": []}
+    if os.path.exists(base + ".json"):
+        with open(base + ".json") as fh:
+            store = json.load(fh)
+    jobs = [(a.n_low, a.n_high, a.per_turn, a.length, a.force, sd, a.budget, a.round_moves,
+             a.batches) for sd in a.seeds]
+    with mp.get_context("spawn").Pool(min(os.cpu_count() or 1, len(jobs))) as pool:
+        for res in pool.imap(ladder, jobs):
+            store["ladders"] = [x for x in store["ladders"] if x["seed"] != res["seed"]] + [res]
+            with open(base + ".json", "w") as fh:  # no lost results: after every ladder
+                json.dump(store, fh)
+            print(f"ladder seed {res['seed']} done", flush=True)
+    ref = None
+    rpath = os.path.join(HERE, "results", f"plectoneme_mc_reference_L{a.length:g}_F{a.force:g}.json")
+    if os.path.exists(rpath):
+        import plectoneme_mc_reference as pr
+        with open(rpath) as fh:
+            rs = json.load(fh)
+        ref = {}
+        for key, pt in rs["points"].items():
+            p = pr.pooled(pt["chains"])
+            ref[key] = (p["z_mean"], p["z_sem"])
+    lines = table(store, ref)
+    print("\n".join(lines))
+    with open(base + ".txt", "w") as fh:
+        fh.write("\n".join(lines) + "\n")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
