@@ -23,7 +23,8 @@ def test_swap_map_is_a_twist_of_the_chain_with_its_torsional_stiffness(lx):
     """T_D spreads a bead turn D over the frames as pure twist: on a 100 nm tether's exact
     start (seed 3, trap angle turned with it) the energy changes only in the twist terms, and
     its part even in D is C kT D^2 / (2 L), the rod's twist energy of Delta Lk = D / 2 pi
-    (Moroz & Nelson 1997: E = 2 pi^2 C kT Delta Tw^2 / L), to round-off (measured 9e-15, asserted 1e-9:
+    (Moroz & Nelson 1997: E = 2 pi^2 C kT Delta Tw^2 / L), to round-off (measured 9e-15,
+    asserted 1e-9:
     the joints take D/N each and the two clamps D/2N; the odd part is the start's own twist,
     Tw = -Wr). T_-D undoes T_D to round-off (detailed balance of
     the swap needs it), and only the frames' side particles and the bead's orientation move,

@@ -147,7 +147,8 @@ def main(argv=None) -> int:
              f"{'sign':>4} {'D (rad)':>8} {'pairs':>6} {'acceptance':>18} {'<Tw_j - Tw_i>':>14} "
              f"{'rungs n=3..':>12}"]
     for r in rows:
-        lines.append(f"{r['spin_sign']:+4.0f} {r['delta_rad']:8.2f} {r['pairs']:6d} {r['acceptance']:10.4f} +- "
+        lines.append(f"{r['spin_sign']:+4.0f} {r['delta_rad']:8.2f} {r['pairs']:6d} "
+                     f"{r['acceptance']:10.4f} +- "
                      f"{r['acceptance_sem']:.4f} {r['mean_dTw_between_chains']:14.4f} "
                      f"{r['rungs_from_n3']:12d}")
     print("\n".join(lines))

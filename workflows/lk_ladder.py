@@ -47,7 +47,8 @@ def ladder(args) -> dict:
 
     n_low, n_high, per_turn, length, force, seed, budget, round_moves, batches = args
     d = 2 * math.pi / per_turn
-    thetas = [2 * math.pi * n_low + k * d for k in range(int(round((n_high - n_low) * per_turn)) + 1)]
+    rungs = int(round((n_high - n_low) * per_turn)) + 1
+    thetas = [2 * math.pi * n_low + k * d for k in range(rungs)]
     K = len(thetas)
     s, m, mv = lx._scene(n_high, length, force, seed)
     c, sides, mo = np.asarray(m.chains[0]), np.asarray(m.sides), int(m.bead_orientation)
@@ -171,7 +172,8 @@ def main(argv=None) -> int:
                 json.dump(store, fh)
             print(f"ladder seed {res['seed']} done", flush=True)
     ref = None
-    rpath = os.path.join(HERE, "results", f"plectoneme_mc_reference_L{a.length:g}_F{a.force:g}.json")
+    rpath = os.path.join(HERE, "results",
+                         f"plectoneme_mc_reference_L{a.length:g}_F{a.force:g}.json")
     if os.path.exists(rpath):
         import plectoneme_mc_reference as pr
         with open(rpath) as fh:
