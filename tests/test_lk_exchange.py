@@ -29,7 +29,7 @@ def test_swap_map_is_a_twist_of_the_chain_with_its_torsional_stiffness(lx):
     Tw = -Wr). T_-D undoes T_D to round-off (detailed balance of
     the swap needs it), and only the frames' side particles and the bead's orientation move,
     each at its distance from its axis."""
-    s, m, mv = lx._scene(0.0, 100.0, 1.0, 3)
+    s, m, mv = lx.ref.moves_chain(0.0, 100.0, 1.0, 3)
     c, sides, mo = np.asarray(m.chains[0]), np.asarray(m.sides), int(m.bead_orientation)
     x = np.array(m.positions)
     e0 = mv.energy.total_terms(x)

@@ -31,12 +31,14 @@ import json
 import math
 import multiprocessing as mp
 import os
+import sys
 import time
 
 import numpy as np
 
 HERE = os.path.dirname(os.path.abspath(__file__))
-RAMP_STAGES, RAMP_MOVES, EQ_MOVES = 400, 2000, 1_000_000  # as plectoneme_mc_reference.py
+sys.path.insert(0, HERE)
+import plectoneme_mc_reference as ref  # noqa: E402  (the chains' scene, moves and ramp)
 SAMPLE_MOVES = 5000
 
 
@@ -60,30 +62,11 @@ def swap_map(pos, c, sides, mo, d, sign):
     return out
 
 
-def _scene(n_turns, length, force, seed):
-    from dnabraid.run.twist_moves import PlectonemeMoves
-    from dnabraid.scenes import make_scene
-
-    s = make_scene("plectoneme", {"length_nm": length, "force_pN": force,
-                                  "turns": [n_turns], "mc_moves": 0, "seed": seed})
-    m = s.build()
-    mv = PlectonemeMoves.for_model(m, moves_per_call=1, seed=100 + seed,
-                                   crank_angle_rad=s.crank_angle_rad,
-                                   pivot_angle_rad=s.pivot_angle_rad,
-                                   frame_angle_rad=s.frame_angle_rad,
-                                   ball_nm=s.bead_move_nm, sweep_nm=s.sweep_nm)
-    return s, m, mv
-
-
 def chain(args) -> dict:
     """Samples of one moves-only chain at trap angle theta (positions every 5000 moves)."""
     theta, length, force, seed, budget = args
-    s, m, mv = _scene(theta / (2 * math.pi), length, force, seed)
-    pos = np.array(m.positions)
-    for k in range(RAMP_STAGES + 1):
-        mv.energy.set_trap_angle(theta * k / RAMP_STAGES)
-        pos, _ = mv.run(pos, RAMP_MOVES)
-    pos, _ = mv.run(pos, EQ_MOVES)
+    _, m, mv = ref.moves_chain(theta / (2 * math.pi), length, force, seed)
+    pos = ref.ramp(mv, np.array(m.positions), theta)
     out = []
     t0 = time.process_time()
     while time.process_time() - t0 < budget:
@@ -110,7 +93,7 @@ def main(argv=None) -> int:
     workers = a.workers or os.cpu_count() or 1
     with mp.get_context("spawn").Pool(min(workers, len(jobs))) as pool:
         res = pool.map(chain, jobs)
-    s, m, mv = _scene(a.turns, a.length, a.force, a.seed)
+    s, m, mv = ref.moves_chain(a.turns, a.length, a.force, a.seed)
     c, sides, mo = np.asarray(m.chains[0]), np.asarray(m.sides), int(m.bead_orientation)
     kT = m.dna.kT
 

@@ -37,8 +37,7 @@ import numpy as np
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, HERE)
-RAMP_STAGES, RAMP_MOVES = 400, 2000
-EQ_MOVES = 200_000
+EQ_MOVES = 200_000  # per rung after the reference's ramp (plectoneme_mc_reference.ramp)
 
 
 def ladder(args) -> dict:
@@ -50,19 +49,14 @@ def ladder(args) -> dict:
     rungs = int(round((n_high - n_low) * per_turn)) + 1
     thetas = [2 * math.pi * n_low + k * d for k in range(rungs)]
     K = len(thetas)
-    s, m, mv = lx._scene(n_high, length, force, seed)
+    import plectoneme_mc_reference as ref
+
+    _, m, mv = ref.moves_chain(n_high, length, force, seed)
     c, sides, mo = np.asarray(m.chains[0]), np.asarray(m.sides), int(m.bead_orientation)
     kT = m.dna.kT
     start = np.array(m.positions)
     t0 = time.process_time()
-    pos = []
-    for th in thetas:
-        p = start.copy()
-        for k in range(RAMP_STAGES + 1):
-            mv.energy.set_trap_angle(th * k / RAMP_STAGES)
-            p, _ = mv.run(p, RAMP_MOVES)
-        p, _ = mv.run(p, EQ_MOVES)
-        pos.append(p)
+    pos = [ref.ramp(mv, start.copy(), th, EQ_MOVES) for th in thetas]
     t_ramp = time.process_time() - t0
     sign = 1.0  # the frames turn with the bead (lk_exchange.py measures both)
     who = list(range(K))  # replica id on each rung

@@ -49,29 +49,43 @@ RAMP_STAGES, RAMP_MOVES, EQ_MOVES = 400, 2000, 1_000_000
 LK_TOL = 0.05
 
 
-def chain(args) -> dict:
-    n_turns, length, force, seed, budget, spread = args
-    from dnabraid.analysis.stats import integrated_autocorrelation_time
-    from dnabraid.geometry.ribbon import tether_twist, writhe_open
+def moves_chain(n_turns, length, force, seed, spread=False):
+    """(scene, model, moves) of one moves-only chain: the plectoneme scene's System and its
+    default move amplitudes, move seed 100 + seed (shared with lk_exchange.py, lk_ladder.py)."""
     from dnabraid.run.twist_moves import PlectonemeMoves
     from dnabraid.scenes import make_scene
 
     s = make_scene("plectoneme", {"length_nm": length, "force_pN": force,
                                   "turns": [n_turns], "mc_moves": 0, "seed": seed})
     m = s.build()
-    c, sides, mo = np.asarray(m.chains[0]), np.asarray(m.sides), m.bead_orientation
     mv = PlectonemeMoves.for_model(m, moves_per_call=1, seed=100 + seed,
                                    crank_angle_rad=s.crank_angle_rad,
                                    pivot_angle_rad=s.pivot_angle_rad,
                                    frame_angle_rad=s.frame_angle_rad,
                                    ball_nm=s.bead_move_nm, sweep_nm=s.sweep_nm,
                                    twist_spread=spread)
-    pos = np.array(m.positions)
-    t_start = time.process_time()
+    return s, m, mv
+
+
+def ramp(mv, pos, theta, eq_moves=EQ_MOVES):
+    """The trap angle ramped 0 -> theta in RAMP_STAGES stages of RAMP_MOVES moves, then
+    ``eq_moves`` moves at theta; returns the positions."""
     for k in range(RAMP_STAGES + 1):
-        mv.energy.set_trap_angle(2 * math.pi * n_turns * k / RAMP_STAGES)
+        mv.energy.set_trap_angle(theta * k / RAMP_STAGES)
         pos, _ = mv.run(pos, RAMP_MOVES)
-    pos, _ = mv.run(pos, EQ_MOVES)
+    pos, _ = mv.run(pos, eq_moves)
+    return pos
+
+
+def chain(args) -> dict:
+    n_turns, length, force, seed, budget, spread = args
+    from dnabraid.analysis.stats import integrated_autocorrelation_time
+    from dnabraid.geometry.ribbon import tether_twist, writhe_open
+
+    s, m, mv = moves_chain(n_turns, length, force, seed, spread)
+    c, sides, mo = np.asarray(m.chains[0]), np.asarray(m.sides), m.bead_orientation
+    t_start = time.process_time()
+    pos = ramp(mv, np.array(m.positions), 2 * math.pi * n_turns)
     t_eq = time.process_time() - t_start
     z, tw, wr = [], [], []
     t0 = time.process_time()
