@@ -37,6 +37,7 @@ from ..observables import columns_of
 from . import reporters
 from .contract import StartError, ThermalContract
 from .engine import Engine, IntegratorSettings, check_platform
+from .ladder import ladder_summary, run_ladder_replica, rung_turns
 from .packing import group_replicas, pack_models, packable
 from .segments import Member, RunSettings, run_members
 from .workers import run_jobs, usable_cores
@@ -197,6 +198,10 @@ def _pack_job(job, report):
     return run_pack(job, report)
 
 
+def _ladder_job(job, report):
+    return run_ladder_replica(job, report)
+
+
 def run(scene: ThermalContract, out: str, *, platform: str = "CPU", threads: int | None = None,
         progress_factory=None) -> dict:
     """Run a thermal scene into the run directory ``out``; return the summary dict.
@@ -223,19 +228,36 @@ def run(scene: ThermalContract, out: str, *, platform: str = "CPU", threads: int
     points: list = []
     R = scene.replicas
     stopped_by = "replicas"
+    plan = scene.ladder_plan()
     while True:
         # run replicas len(results) .. R-1 (all of them the first time)
-        groups = replica_groups(scene, range(len(results), R), workers, platform, model)
-        nw = max(1, min(workers, len(groups))) if platform == "CPU" else 1
-        jobs = [(scene, g, out, platform, threads if nw == 1 else 1) for g in groups]
-        bar = progress_factory(sched.total_steps * (R - len(results))) \
-            if progress_factory else None
-        try:
-            done = run_jobs(_pack_job, jobs, nw, progress=bar.update if bar else None)
-            results += [x for res in done for x in res]
-        finally:
-            if bar:
-                bar.close()
+        if plan is not None:
+            # replica exchange over the trap angle: one independent ladder per replica,
+            # moves only, one pinned core each (dnabraid.run.ladder)
+            todo = list(range(len(results), R))
+            n_rungs = len(rung_turns([seg.turns for seg in sched], plan.per_turn))
+            bar = progress_factory(plan.moves_per_replica(n_rungs) * len(todo)) \
+                if progress_factory else None
+            try:
+                done = run_jobs(_ladder_job, [(scene, r, out) for r in todo],
+                                max(1, min(workers, len(todo))),
+                                progress=bar.update if bar else None)
+                results += done
+            finally:
+                if bar:
+                    bar.close()
+        else:
+            groups = replica_groups(scene, range(len(results), R), workers, platform, model)
+            nw = max(1, min(workers, len(groups))) if platform == "CPU" else 1
+            jobs = [(scene, g, out, platform, threads if nw == 1 else 1) for g in groups]
+            bar = progress_factory(sched.total_steps * (R - len(results))) \
+                if progress_factory else None
+            try:
+                done = run_jobs(_pack_job, jobs, nw, progress=bar.update if bar else None)
+                results += [x for res in done for x in res]
+            finally:
+                if bar:
+                    bar.close()
         columns = columns_of(obs)
         points = []
         for k, seg in enumerate(sched):
@@ -256,7 +278,7 @@ def run(scene: ThermalContract, out: str, *, platform: str = "CPU", threads: int
         R = min(need, scene.max_replicas)
     wall = time.perf_counter() - t0
     resumed = any(r["resumed"] for r in results)
-    total = sched.total_steps * R
+    total = sched.total_steps * R if plan is None else 0
     p = model.params
     dt_ns = model.timestep.time_step_ns
     rundir.write_topology(os.path.join(out, "topology.pdb"), model.topology, model.positions)
@@ -280,12 +302,24 @@ def run(scene: ThermalContract, out: str, *, platform: str = "CPU", threads: int
                      "initial state): " + "; ".join(not_built))
     n_part = model.system.getNumParticles()
     notes += packing_notes(sorted({r["pack"] for r in results}))
+    if plan is not None:
+        lad = ladder_summary(out, [r["replica"] for r in results])
+        for pt in points:
+            pt["ladder"] = lad
+        rates = [x for x in lad["swap_acceptance"] if x is not None]
+        notes.append(
+            f"sampled by replica exchange over the trap angle (sampler = ladder): "
+            f"{R} independent ladders of {len(lad['rungs_turns'])} rungs "
+            f"(1/{plan.per_turn} turn apart), moves only, no Brownian steps (the step "
+            f"column counts moves; no time step applies); swap acceptance "
+            + (f"{min(rates):.2f}-{max(rates):.2f}" if rates else "-")
+            + f", round trips per ladder {lad['round_trips']}")
     summary = rundir.Summary(
         scene=scene.to_dict(), wall_time_s=wall, platform=platform,
         time_step_ps=dt_ns * 1e3, time_step_reason=model.timestep.reason,
         relaxation_rates_per_ns=model.timestep.rates_per_ns, total_steps=total,
-        steps_per_second=total / wall if not resumed else None,
-        ns_per_bead_per_step=(wall / total / n_part * 1e9 * workers) if not resumed
+        steps_per_second=total / wall if not resumed and total else None,
+        ns_per_bead_per_step=(wall / total / n_part * 1e9 * workers) if not resumed and total
         else None,
         n_particles=n_part, forces=sorted(model.forces),
         effective_diameter_nm=p["diameter_nm"], bending_kappa_kT=p["kappa_kT"],

@@ -39,6 +39,7 @@ from ..forces.twist_frames import (
     twist_force,
 )
 from ..geometry.ribbon import writhe_open
+from ..run.ladder import LadderPlan, rung_turns
 from ..run.twist_moves import SWEEP_NM, PlectonemeMoves
 from .base import SceneError, key
 from .tweezer_base import TurnedScene
@@ -81,6 +82,19 @@ MC_MOVES_HELP = ("twist-aware Metropolis moves after every report interval (cran
                  "independent reference 799.1 +- 0.4 nm) where Brownian dynamics alone did not "
                  "(R-hat 2.6; ESS 5). 0 = Brownian dynamics alone (physical kinetics; the "
                  "moves' time correlations are not physical)")
+
+
+SAMPLERS = ("hybrid", "ladder")
+SAMPLER_HELP = ("hybrid: Brownian dynamics with mc_moves Metropolis moves between steps (the "
+                "default); ladder: moves only, one ladder of chains per replica at trap angles "
+                "1/ladder_per_turn turn apart from the lowest to the highest turns, neighbours "
+                "swapped through a map that spreads the bead's turn over the frames "
+                "(dnabraid.run.ladder, docs/validation.md 2.3n, 2.3o): no Brownian steps, no "
+                "time-step bias, no kinetics")
+#: The ladder's ramp: moves per turn up the ladder (the moves-only reference ramps 3 turns
+#: in 8e5 moves, 2.7e5 per turn) and moves at each rung's angle when the ramp reaches it.
+LADDER_RAMP_MOVES_PER_TURN = 200_000
+LADDER_RUNG_EQ_MOVES = 20_000
 
 
 @dataclasses.dataclass(frozen=True)
@@ -132,9 +146,43 @@ class Plectoneme(TurnedScene):
                              "shared by all joints of the chain in inverse proportion to their "
                              "stiffness (docs/validation.md 2.3m); false: the two joints take it")
 
+    sampler: str = key("hybrid", "", SAMPLER_HELP)
+    ladder_per_turn: int = key(6, "rungs/turn", "sampler = ladder: rungs per turn (the swap "
+                               "turns the bead by 2 pi / ladder_per_turn; swap acceptance "
+                               "0.62-0.71 at 6 on 300 nm at 1 pN, n = 3-6); the rungs are "
+                               "evenly spaced from the lowest to the highest turns, at most "
+                               "1/ladder_per_turn apart, and every value of turns must lie on "
+                               "one")
+    ladder_rounds: int = key(1000, "rounds", "sampler = ladder: sampling rounds per replica "
+                             "(a sample of every point after each)")
+    ladder_equilibration_rounds: int = key(100, "rounds", "sampler = ladder: rounds with swaps "
+                                           "before sampling, after the ramp up the ladder")
+    ladder_round_moves: int = key(1000, "moves", "sampler = ladder: moves per rung between "
+                                  "swap phases")
+    ladder_frame_every: int = key(10, "rounds", "sampler = ladder: rounds between trajectory "
+                                  "frames (and the per-frame observables: Tw, Wr, plectonemes)")
+
     def validate(self) -> None:
         super().validate()
         need = self.need
+        need(self.sampler in SAMPLERS, "sampler", f"allowed: {', '.join(SAMPLERS)}")
+        if self.sampler == "ladder":
+            for k in ("ladder_per_turn", "ladder_rounds", "ladder_round_moves",
+                      "ladder_frame_every"):
+                need(getattr(self, k) >= 1, k, "must be >= 1")
+            need(self.ladder_equilibration_rounds >= 0, "ladder_equilibration_rounds",
+                 "must be >= 0")
+            need(self.ladder_rounds >= 2 * self.ladder_frame_every, "ladder_rounds",
+                 f"must be >= 2 x ladder_frame_every = {2 * self.ladder_frame_every}")
+            need(self.stretch == "bonds", "sampler",
+                 "the ladder's moves need stretch='bonds'")
+            need(self.alpha == 0.0, "sampler", "the moves' local energies have no chiral "
+                 "term; set alpha=0")
+            need(len(set(self.turns)) == len(self.turns), "turns", "must be distinct")
+            try:
+                rung_turns(self.turns, self.ladder_per_turn)
+            except ValueError as exc:
+                need(False, "turns", str(exc))
         need(self.mc_moves >= 0, "mc_moves", "must be >= 0 (0 = Brownian dynamics alone)")
         for k in ("crank_angle_rad", "pivot_angle_rad", "frame_angle_rad"):
             need(0 <= getattr(self, k) <= math.pi, k, "must be in [0, pi]")
@@ -208,7 +256,7 @@ class Plectoneme(TurnedScene):
         kit.attachments = [att]
         kit.sides = sides
         kit.bead_orientation = m
-        if self.mc_moves > 0:
+        if self.mc_moves > 0 and self.sampler == "hybrid":
             # the LocalEnergy is built from the finished System at the first call
             kit.moves = PlectonemeMoves(kit.system, c0, sides, m, kit.fixed, kT,
                                         moves_per_call=self.mc_moves,
@@ -249,6 +297,25 @@ class Plectoneme(TurnedScene):
         except StartDrawError as exc:
             raise SceneError(f"force_pN={self.force_pN} pN: {exc}; a plectoneme start needs "
                              "a chain that fits above the wall with |Wr| <= 0.25") from exc
+
+    def ladder_plan(self) -> LadderPlan | None:
+        if self.sampler != "ladder":
+            return None
+        return LadderPlan(per_turn=self.ladder_per_turn, round_moves=self.ladder_round_moves,
+                          rounds=self.ladder_rounds,
+                          equilibration_rounds=self.ladder_equilibration_rounds,
+                          ramp_moves_per_turn=LADDER_RAMP_MOVES_PER_TURN,
+                          rung_equilibration_moves=LADDER_RUNG_EQ_MOVES,
+                          frame_every=self.ladder_frame_every)
+
+    def ladder_moves(self, model) -> PlectonemeMoves:
+        """The scene's moves (its amplitudes and mix) on the replica's own LocalEnergy."""
+        return PlectonemeMoves.for_model(model, moves_per_call=self.ladder_round_moves,
+                                         crank_angle_rad=self.crank_angle_rad,
+                                         pivot_angle_rad=self.pivot_angle_rad,
+                                         frame_angle_rad=self.frame_angle_rad,
+                                         ball_nm=self.bead_move_nm, sweep_nm=self.sweep_nm,
+                                         twist_spread=self.twist_spread, seed=self.seed)
 
     def observables(self, model) -> list:
         c = model.chains[0]
