@@ -50,15 +50,15 @@ def _rot(v, axis, ang):
 
 def swap_map(pos, c, sides, mo, d, sign):
     """T_d: the bead's orientation particle turned by d about z through the attachment, the
-    frame of bond q spun about its bond by sign * d (q + 1/2) / N."""
-    out = np.array(pos, copy=True)
-    nb = len(sides)
-    for q in range(nb):
-        a, b = out[c[q]], out[c[q + 1]]
-        ax = (b - a) / np.linalg.norm(b - a)
-        out[sides[q]] = a + _rot(out[sides[q]] - a, ax, sign * d * (q + 0.5) / nb)
+    frame of bond q spun about its bond by sign * d (q + 1/2) / N (sign +1:
+    :func:`dnabraid.run.ladder.swap_map`; -1 the control: frames against the bead)."""
+    from dnabraid.run.ladder import swap_map as lib_map
+
+    if sign == 1.0:
+        return lib_map(pos, c, sides, mo, d)
+    out = lib_map(pos, c, sides, -1, -d)  # frames turned against the bead
     att = out[c[-1]]
-    out[mo] = att + _rot(out[mo] - att, np.array([0.0, 0.0, 1.0]), d)
+    out[mo] = att + _rot(np.asarray(pos[mo]) - att, np.array([0.0, 0.0, 1.0]), d)
     return out
 
 

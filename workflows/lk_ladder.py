@@ -6,8 +6,12 @@ up to 2 pi n_high, so the integer turns sit on rungs. Each rung's chain is rampe
 theta_k (400 stages) from the seed's exact WLC start and equilibrated; then rounds of
 ``--round-moves`` moves per rung alternate with swap attempts between neighbouring rungs
 (even pairs, then odd), each swap mapped so that the bead's turn is spread over the frames
-(:func:`lk_exchange.swap_map`; acceptance on the full energy, detailed balance kept: the
-map is volume-preserving and T_-D is its inverse). Below buckling the moves mix well, so
+(:func:`dnabraid.run.ladder.swap_map`, :class:`dnabraid.run.ladder.TrapLadder`; acceptance
+on the full energy, detailed balance kept: the map is volume-preserving and T_-D is its
+inverse). The stored results (docs/validation.md 2.3n) were made by this script's own copy
+of the loop before it moved into the library (same moves, map and schedule; other swap
+draws). ``dnabraid run plectoneme --set sampler=ladder`` runs ladders as replicas with
+verdicts (2.3o). Below buckling the moves mix well, so
 states mixed at n_low climb the ladder; the slow tail-plectoneme exchange at n_high is
 bypassed.
 
@@ -41,80 +45,48 @@ EQ_MOVES = 200_000  # per rung after the reference's ramp (plectoneme_mc_referen
 
 
 def ladder(args) -> dict:
-    import lk_exchange as lx
-    from dnabraid.geometry.ribbon import tether_twist
+    from dnabraid.geometry.ribbon import tether_twist, writhe_open
+    from dnabraid.run.ladder import TrapLadder
 
     n_low, n_high, per_turn, length, force, seed, budget, round_moves, batches = args
     d = 2 * math.pi / per_turn
     rungs = int(round((n_high - n_low) * per_turn)) + 1
-    thetas = [2 * math.pi * n_low + k * d for k in range(rungs)]
-    K = len(thetas)
+    turns = [n_low + k * d / (2 * math.pi) for k in range(rungs)]
+    K = len(turns)
     import plectoneme_mc_reference as ref
 
     _, m, mv = ref.moves_chain(n_high, length, force, seed)
     c, sides, mo = np.asarray(m.chains[0]), np.asarray(m.sides), int(m.bead_orientation)
-    kT = m.dna.kT
+    # the library's ladder (dnabraid.run.ladder; the frames turn with the bead, sign +1 of
+    # lk_exchange.py); swap draws seeded 1000 + seed
+    lad = TrapLadder(mv, c, sides, mo, turns, m.dna.kT, seed=1000 + seed)
     start = np.array(m.positions)
     t0 = time.process_time()
-    pos = [ref.ramp(mv, start.copy(), th, EQ_MOVES) for th in thetas]
+    lad.pos = [ref.ramp(mv, start.copy(), th, EQ_MOVES) for th in lad.thetas]
     t_ramp = time.process_time() - t0
-    sign = 1.0  # the frames turn with the bead (lk_exchange.py measures both)
-    who = list(range(K))  # replica id on each rung
-    going_up = [None] * K  # per replica: True once it touched rung 0, False after the top
-    trips = 0
-    tries = np.zeros(K - 1)
-    accs = np.zeros(K - 1)
     z, tw = [], []
-    rng = np.random.default_rng(1000 + seed)
     t1 = time.process_time()
-    r = 0
     while time.process_time() - t1 < budget:
-        for k in range(K):
-            mv.energy.set_trap_angle(thetas[k])
-            pos[k], _ = mv.run(pos[k], round_moves)
-        for k in range(r % 2, K - 1, 2):
-            xi, xj = pos[k], pos[k + 1]
-            mv.energy.set_trap_angle(thetas[k])
-            ui = mv.energy.total(xi)
-            yi = lx.swap_map(xj, c, sides, mo, -d, sign)
-            ui_new = mv.energy.total(yi)
-            mv.energy.set_trap_angle(thetas[k + 1])
-            uj = mv.energy.total(xj)
-            yj = lx.swap_map(xi, c, sides, mo, d, sign)
-            uj_new = mv.energy.total(yj)
-            de = (uj_new - ui + ui_new - uj) / kT
-            tries[k] += 1
-            if de <= 0 or rng.random() < math.exp(-de):
-                accs[k] += 1
-                pos[k], pos[k + 1] = yi, yj
-                who[k], who[k + 1] = who[k + 1], who[k]
-        for k in (0, K - 1):
-            rid = who[k]
-            if k == 0:
-                if going_up[rid] is False:
-                    trips += 1
-                going_up[rid] = True
-            elif going_up[rid] is True:
-                going_up[rid] = False
-        z.append([float(p[c[-1], 2] - p[c[0], 2]) for p in pos])
-        if r % 5 == 0:
-            tw.append([tether_twist(p[c], p[sides], p[mo] - p[c[-1]]) for p in pos])
-        r += 1
+        lad.round(round_moves)
+        z.append([float(p[c[-1], 2] - p[c[0], 2]) for p in lad.pos])
+        if lad.rounds % 5 == 1:
+            tw.append([tether_twist(p[c], p[sides], p[mo] - p[c[-1]]) for p in lad.pos])
     cpu = time.process_time() - t1
-    from dnabraid.geometry.ribbon import writhe_open
+    r = lad.rounds
     # Tw + Wr on each rung at the end must equal its turns (no strand passage, no slip)
-    lk_end = [tether_twist(p[c], p[sides], p[mo] - p[c[-1]]) + writhe_open(p[c]) for p in pos]
+    lk_end = [tether_twist(p[c], p[sides], p[mo] - p[c[-1]]) + writhe_open(p[c])
+              for p in lad.pos]
     z = np.array(z)
     nb = len(z) // batches
     bm = z[:nb * batches].reshape(batches, nb, K).mean(axis=1)
-    return {"seed": seed, "thetas": thetas, "turns": [th / (2 * math.pi) for th in thetas],
+    return {"seed": seed, "thetas": lad.thetas, "turns": turns,
             "rounds": r, "round_moves": round_moves, "cpu_s": cpu, "cpu_ramp_eq_s": t_ramp,
             "z_mean": z.mean(axis=0).tolist(),
             "z_sem_batches": (bm.std(axis=0, ddof=1) / math.sqrt(batches)).tolist(),
             "tw_mean": np.array(tw).mean(axis=0).tolist(),
-            "acceptance": (accs / np.maximum(tries, 1)).tolist(), "round_trips": trips,
-            "lk_end": lk_end,
-            "sign": sign, "us_per_move": 1e6 * cpu / (r * round_moves * K)}
+            "acceptance": [a or 0.0 for a in lad.acceptance()],
+            "round_trips": lad.round_trips, "lk_end": lk_end,
+            "sign": 1.0, "us_per_move": 1e6 * cpu / (r * round_moves * K)}
 
 
 def table(store: dict, ref: dict | None) -> list[str]:
