@@ -25,7 +25,6 @@ settings.
 from __future__ import annotations
 
 import dataclasses
-import hashlib
 import json
 import os
 import time
@@ -39,7 +38,7 @@ from .contract import StartError, ThermalContract
 from .engine import Engine, IntegratorSettings, check_platform
 from .ladder import ladder_summary, run_ladder_replica, rung_turns
 from .packing import group_replicas, pack_models, packable
-from .segments import Member, RunSettings, run_members
+from .segments import Member, RunSettings, run_members, start_fingerprint
 from .workers import run_jobs, usable_cores
 
 __all__ = ["run", "run_pack", "replica_groups", "packing_notes", "moves_summary",
@@ -130,12 +129,6 @@ def _starts(scene: ThermalContract, model, schedule) -> tuple[dict, list[str], l
             record.append({"kind": "not built: the model's start, ramped",
                            "fingerprint": start_fingerprint(model.positions)})
     return out, failed, record
-
-
-def start_fingerprint(positions) -> str:
-    """A short hash of start positions (rounded to 1e-6 nm): equal for equal starts."""
-    x = np.round(np.asarray(positions, float), 6) + 0.0  # -0.0 -> 0.0
-    return hashlib.sha1(x.tobytes()).hexdigest()[:12]
 
 
 def shared_starts(records: list[dict]) -> list[list[int]]:

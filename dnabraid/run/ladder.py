@@ -270,8 +270,7 @@ def run_ladder_replica(job, progress=None) -> dict:
     from .. import rundir
     from ..observables import ObserveContext, columns_of
     from . import reporters
-    from .driver import start_fingerprint
-    from .segments import _observe, moves_since, point_dir
+    from .segments import _observe, moves_since, point_dir, start_fingerprint
 
     progress = progress or (lambda n: None)
     base, r, out = job

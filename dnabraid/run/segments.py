@@ -27,6 +27,7 @@ from __future__ import annotations
 
 import contextlib
 import dataclasses
+import hashlib
 import json
 import logging
 import math
@@ -45,7 +46,13 @@ from .states import Segment
 
 log = logging.getLogger(__name__)
 
-__all__ = ["run_members", "point_dir", "Member", "RunSettings"]
+__all__ = ["run_members", "point_dir", "Member", "RunSettings", "start_fingerprint"]
+
+
+def start_fingerprint(positions) -> str:
+    """A short hash of start positions (rounded to 1e-6 nm): equal for equal starts."""
+    x = np.round(np.asarray(positions, float), 6) + 0.0  # -0.0 -> 0.0
+    return hashlib.sha1(x.tobytes()).hexdigest()[:12]
 
 
 def point_dir(out: str, seg: Segment) -> str:

@@ -127,8 +127,12 @@ def reported(summary: dict) -> list[tuple[str, dict]]:
 def print_table(summary: dict, state_widths: dict, file) -> None:
     """The time step, the notes, one row per point (state, reported columns as mean +-
     SEM, NOT CONVERGED marks) and the verdict line."""
-    print(f"time step {summary['time_step_ps']:.4g} ps: {summary['time_step_reason']}",
-          file=file)
+    if summary.get("total_steps", 1) or not summary.get("points"):
+        print(f"time step {summary['time_step_ps']:.4g} ps: {summary['time_step_reason']}",
+              file=file)
+    else:  # moves only (a ladder): no Brownian step was taken
+        print("no Brownian steps: sampled by Metropolis moves alone (no time step applies)",
+              file=file)
     for n in summary["notes"]:
         print(f"note: {n}", file=file)
     pts = summary["points"]
