@@ -270,7 +270,7 @@ def run_ladder_replica(job, progress=None) -> dict:
     from .. import rundir
     from ..observables import ObserveContext, columns_of
     from . import reporters
-    from .segments import _observe, moves_since, point_dir, start_fingerprint
+    from .segments import moves_since, observe_values, point_dir, start_fingerprint
 
     progress = progress or (lambda n: None)
     base, r, out = job
@@ -322,7 +322,7 @@ def run_ladder_replica(job, progress=None) -> dict:
             frame = (i + 1) % plan.frame_every == 0
             for o, k, c, w in zip(obs, at, ctxs, ws):
                 pos = lad.pos[k]
-                values, msg = _observe(o, pos, c, frame)
+                values, msg = observe_values(o, pos, c, frame)
                 if msg:
                     raise RuntimeError(f"ladder replica {r}, turns {rungs[k]:g}, round "
                                        f"{lad.rounds}: {msg}")

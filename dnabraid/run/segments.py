@@ -46,7 +46,8 @@ from .states import Segment
 
 log = logging.getLogger(__name__)
 
-__all__ = ["run_members", "point_dir", "Member", "RunSettings", "start_fingerprint"]
+__all__ = ["run_members", "point_dir", "Member", "RunSettings", "start_fingerprint",
+           "observe_values"]
 
 
 def start_fingerprint(positions) -> str:
@@ -104,7 +105,9 @@ class Member:
     label: str = ""
 
 
-def _observe(observables, pos, ctx, every_frame: bool) -> tuple[dict, str | None]:
+def observe_values(observables, pos, ctx, every_frame: bool) -> tuple[dict, str | None]:
+    """The observables' values at ``pos`` (per-frame ones only when ``every_frame``) and
+    the first broken invariant's message (None when all hold)."""
     values: dict = {}
     for ob in observables:
         if ob.every == "frame" and not every_frame:
@@ -232,7 +235,7 @@ def _run_members(engine, schedule, members, settings, ckdir, chk_path, *, progre
             if check is not None:
                 check(parts)
             for m, c, p, w in zip(members, ctxs, parts, writers or [None] * len(members)):
-                values, msg = _observe(m.observables, p, c, every_frame)
+                values, msg = observe_values(m.observables, p, c, every_frame)
                 if msg:
                     engine.blow_up(msg if len(members) == 1 else f"{m.label}: {msg}",
                                    advice="" if advice and "turn_rate" in msg else advice)
