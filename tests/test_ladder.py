@@ -161,3 +161,24 @@ def test_ladder_run_samples_each_rung_against_exact_draws(tmp_path):
     assert all(0.3 < a < 1.0 for a in lad["swap_acceptance"]), lad
     assert summ["total_steps"] == 0 and summ["steps_per_second"] is None
     assert any("replica exchange over the trap angle" in n for n in summ["notes"])
+
+
+def test_a_ladders_points_are_judged_together():
+    """One unconverged point, or a ladder with fewer than MIN_ROUND_TRIPS round trips, fails
+    every point of the run (swaps carry states between all rungs; docs/validation.md 2.3o)."""
+    from dnabraid.run.ladder import MIN_ROUND_TRIPS, judge_ladder
+
+    def pts(ok):
+        return [{"label": f"turns {k}", "converged": c, "convergence_reason": "ok" if c
+                 else "R-hat"} for k, c in enumerate(ok)]
+
+    p = pts([True, True])
+    judge_ladder(p, {"round_trips": [MIN_ROUND_TRIPS, MIN_ROUND_TRIPS + 3]})
+    assert all(x["converged"] for x in p) and p[0]["ladder"]["round_trips"]
+    p = pts([True, False])
+    judge_ladder(p, {"round_trips": [9, 9]})
+    assert not p[0]["converged"] and "turns 1" in p[0]["convergence_reason"]
+    assert p[1]["convergence_reason"] == "R-hat"
+    p = pts([True, True])
+    judge_ladder(p, {"round_trips": [MIN_ROUND_TRIPS - 1, 9]})
+    assert not any(x["converged"] for x in p) and "round trip" in p[0]["convergence_reason"]

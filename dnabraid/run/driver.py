@@ -36,7 +36,7 @@ from ..observables import columns_of
 from . import reporters
 from .contract import StartError, ThermalContract
 from .engine import Engine, IntegratorSettings, check_platform
-from .ladder import ladder_summary, run_ladder_replica, rung_turns
+from .ladder import judge_ladder, ladder_summary, run_ladder_replica, rung_turns
 from .packing import group_replicas, pack_models, packable
 from .segments import Member, RunSettings, run_members, start_fingerprint
 from .workers import run_jobs, usable_cores
@@ -269,6 +269,10 @@ def run(scene: ThermalContract, out: str, *, platform: str = "CPU", threads: int
             stopped_by = "budget"
             break
         R = min(need, scene.max_replicas)
+    if plan is not None:
+        # a ladder's points share their states: judged together (dnabraid.run.ladder)
+        lad = ladder_summary(out, [r["replica"] for r in results])
+        judge_ladder(points, lad)
     wall = time.perf_counter() - t0
     resumed = any(r["resumed"] for r in results)
     total = sched.total_steps * R if plan is None else 0
@@ -296,9 +300,6 @@ def run(scene: ThermalContract, out: str, *, platform: str = "CPU", threads: int
     n_part = model.system.getNumParticles()
     notes += packing_notes(sorted({r["pack"] for r in results}))
     if plan is not None:
-        lad = ladder_summary(out, [r["replica"] for r in results])
-        for pt in points:
-            pt["ladder"] = lad
         rates = [x for x in lad["swap_acceptance"] if x is not None]
         notes.append(
             f"sampled by replica exchange over the trap angle (sampler = ladder): "
