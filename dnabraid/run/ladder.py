@@ -23,7 +23,11 @@ in a swap, so the linking number Tw + Wr of every state equals its rung's turns.
 
 :class:`TrapLadder` holds the rungs' positions, runs rounds (moves on every rung, then swap
 attempts between even or odd neighbour pairs, alternating) and counts acceptances and round
-trips (a state carried from the lowest rung to the highest and back).
+trips (a state carried from the lowest rung to the highest and back). For ``dnabraid run``
+(:func:`run_ladder_replica`) one replica is one independent ladder from its own start; the
+driver judges a ladder run's points together (:func:`judge_ladder`): swaps carry states
+between all rungs, so one rung that has not converged biases the others alike in every
+ladder (docs/validation.md 2.3o).
 """
 
 from __future__ import annotations
