@@ -107,14 +107,11 @@ class ThermalContract(abc.ABC):
         """Add what the scene says of a finished point (e.g. its precision verdict)."""
 
     def ladder_plan(self):
-        """A :class:`dnabraid.run.ladder.LadderPlan` when the scene samples its states by
-        replica exchange over the trap angle (moves only, no Brownian steps); None (the
-        default) for Brownian dynamics with the scene's moves between steps."""
+        """A :class:`dnabraid.run.ladder.LadderPlan` (which names the moves it runs) when
+        the scene samples its states by replica exchange over the trap angle (moves only,
+        no Brownian steps); None (the default) for Brownian dynamics with the scene's moves
+        between steps."""
         return None
-
-    def ladder_moves(self, model):
-        """The Metropolis moves a ladder runs on ``model`` (scenes with a ladder plan)."""
-        raise NotImplementedError
 
     @abc.abstractmethod
     def plot(self, summary: dict, out: str) -> None:

@@ -229,28 +229,22 @@ def run(scene: ThermalContract, out: str, *, platform: str = "CPU", threads: int
             # moves only, one pinned core each (dnabraid.run.ladder)
             todo = list(range(len(results), R))
             n_rungs = len(rung_turns([seg.turns for seg in sched], plan.per_turn))
-            bar = progress_factory(plan.moves_per_replica(n_rungs) * len(todo)) \
-                if progress_factory else None
-            try:
-                done = run_jobs(_ladder_job, [(scene, r, out) for r in todo],
-                                max(1, min(workers, len(todo))),
-                                progress=bar.update if bar else None)
-                results += done
-            finally:
-                if bar:
-                    bar.close()
+            fn, jobs, nw = _ladder_job, [(scene, r, out) for r in todo], max(1, min(workers,
+                                                                                    len(todo)))
+            work = plan.moves_per_replica(n_rungs) * len(todo)
         else:
             groups = replica_groups(scene, range(len(results), R), workers, platform, model)
             nw = max(1, min(workers, len(groups))) if platform == "CPU" else 1
-            jobs = [(scene, g, out, platform, threads if nw == 1 else 1) for g in groups]
-            bar = progress_factory(sched.total_steps * (R - len(results))) \
-                if progress_factory else None
-            try:
-                done = run_jobs(_pack_job, jobs, nw, progress=bar.update if bar else None)
-                results += [x for res in done for x in res]
-            finally:
-                if bar:
-                    bar.close()
+            fn, jobs = _pack_job, [(scene, g, out, platform, threads if nw == 1 else 1)
+                                   for g in groups]
+            work = sched.total_steps * (R - len(results))
+        bar = progress_factory(work) if progress_factory else None
+        try:
+            done = run_jobs(fn, jobs, nw, progress=bar.update if bar else None)
+            results += done if plan is not None else [x for res in done for x in res]
+        finally:
+            if bar:
+                bar.close()
         columns = columns_of(obs)
         points = []
         for k, seg in enumerate(sched):

@@ -38,6 +38,7 @@ import json
 import math
 import os
 import shutil
+from collections.abc import Callable
 
 import numba
 import numpy as np
@@ -230,8 +231,12 @@ class LadderPlan:
         Moves at each rung's angle after the ramp reaches it.
     frame_every : int
         Rounds between trajectory frames (and the per-frame observables).
+    make_moves : callable(model) -> PlectonemeMoves
+        The Metropolis moves the ladder runs on a replica's model (the scene's mix and
+        amplitudes).
     """
 
+    make_moves: Callable
     per_turn: int
     round_moves: int
     rounds: int
@@ -303,7 +308,7 @@ def run_ladder_replica(job, progress=None) -> dict:
     for p in pdirs:  # an interrupted ladder runs again from its start
         if os.path.isdir(p):
             shutil.rmtree(p)
-    mv = scene.ladder_moves(model)
+    mv = plan.make_moves(model)
     chain = np.asarray(model.chains[0])
     lad = TrapLadder(mv, chain, model.sides, model.bead_orientation, rungs, model.dna.kT,
                      seed=scene.seed)

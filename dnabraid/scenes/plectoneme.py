@@ -301,7 +301,8 @@ class Plectoneme(TurnedScene):
     def ladder_plan(self) -> LadderPlan | None:
         if self.sampler != "ladder":
             return None
-        return LadderPlan(per_turn=self.ladder_per_turn, round_moves=self.ladder_round_moves,
+        return LadderPlan(make_moves=self.ladder_moves, per_turn=self.ladder_per_turn,
+                          round_moves=self.ladder_round_moves,
                           rounds=self.ladder_rounds,
                           equilibration_rounds=self.ladder_equilibration_rounds,
                           ramp_moves_per_turn=LADDER_RAMP_MOVES_PER_TURN,
