@@ -141,7 +141,7 @@ def _exact(turns, L=60.0, F=2.0, n_draws=8000, batches=20, seed=2):
 
 def test_ladder_run_samples_each_rung_against_exact_draws(tmp_path):
     """``sampler = ladder`` through the driver (two independent ladders, rungs 0, 1/6, 1/3,
-    1/2): <z> at turns 0 and 0.5 within 4 SE of the exact reweighted draws, every point's
+    1/2; the default ``ladder_starts = alternate`` fills the second from the top): <z> at turns 0 and 0.5 within 4 SE of the exact reweighted draws, every point's
     linking number on its turns, swaps accepted, the step column counting moves."""
     turns = [0.0, 0.5]
     s = make_scene("plectoneme", {"length_nm": 60.0, "force_pN": 2.0, "turns": turns,
@@ -182,3 +182,78 @@ def test_a_ladders_points_are_judged_together():
     p = pts([True, True])
     judge_ladder(p, {"round_trips": [MIN_ROUND_TRIPS - 1, 9]})
     assert not any(x["converged"] for x in p) and "round trip" in p[0]["convergence_reason"]
+
+
+def test_ladders_filled_from_both_ends_stand_in_for_round_trips():
+    """With no round trips, ladders filled from both ends (>= MIN_LADDERS_PER_END each) let
+    converged points stand; from one end only they fail; an unconverged point still fails
+    all. The split reports down - up of the replica means with Welch's t (numbers by
+    hand: up 1, 3; down 6, 8: difference 5, se sqrt(2/2 + 2/2) = sqrt 2)."""
+    from dnabraid.run.ladder import MIN_LADDERS_PER_END, judge_ladder
+
+    def pts(ok):
+        return [{"label": f"turns {k}", "converged": c, "convergence_reason": "ok" if c
+                 else "R-hat", "extension_nm": {"replica_means": [1.0, 6.0, 3.0, 8.0]}}
+                for k, c in enumerate(ok)]
+
+    assert MIN_LADDERS_PER_END == 2
+    both = ["up", "down", "up", "down"]
+    p = pts([True, True])
+    judge_ladder(p, {"round_trips": [0, 0, 0, 0], "starts": both})
+    assert all(x["converged"] for x in p)
+    split = p[0]["ladder_direction"]
+    assert split["down_minus_up"] == pytest.approx(5.0)
+    assert split["se"] == pytest.approx(math.sqrt(2.0))
+    assert split["t"] == pytest.approx(5.0 / math.sqrt(2.0))
+    p = pts([True, True])
+    judge_ladder(p, {"round_trips": [0, 0, 0, 0], "starts": ["up", "up", "up", "down"]})
+    assert not any(x["converged"] for x in p) and "scarcer end" in p[0]["convergence_reason"]
+    assert p[0]["ladder_direction"] is None
+    p = pts([False, True])
+    judge_ladder(p, {"round_trips": [0, 0, 0, 0], "starts": both})
+    assert not p[1]["converged"] and "turns 0" in p[1]["convergence_reason"]
+
+
+def test_ramp_down_fills_the_rungs_from_the_top():
+    """ramp_down steps the trap angle from 0 to the top rung, then down through every rung,
+    each rung keeping the state reached at its own angle; ramp_up the mirror order. A stub
+    of the moves records the angle of each call and stamps the state with it."""
+    from dnabraid.run.ladder import LadderPlan, TrapLadder, ramp_down, ramp_up
+
+    class Energy:
+        theta = 0.0
+
+        def set_trap_angle(self, t):
+            self.theta = t
+
+    class Moves:
+        def __init__(self):
+            self.energy = Energy()
+            self.angles = []
+
+        def run(self, pos, n):
+            self.angles.append(self.energy.theta)
+            out = pos.copy()
+            out[0, 0] = self.energy.theta
+            return out, None
+
+    plan = LadderPlan(make_moves=None, per_turn=2, round_moves=1, rounds=2,
+                      equilibration_rounds=0, ramp_moves_per_turn=4000,
+                      rung_equilibration_moves=10, frame_every=1)
+    turns = [1.0, 1.5, 2.0]
+    for fill, first, order in ((ramp_down, 2.0, [2.0, 1.5, 1.0]),
+                               (ramp_up, 1.0, [1.0, 1.5, 2.0])):
+        mv = Moves()
+        lad = TrapLadder(mv, [0, 1, 2], [3, 4], 5, turns, 4.1, seed=1)
+        fill(lad, np.zeros((6, 3)), plan)
+        got = [a / (2 * math.pi) for a in mv.angles]
+        ramp = got[:got.index(first) + 1]
+        assert ramp == sorted(ramp) and ramp[-1] == first  # 0 -> first rung, increasing
+        stops = [g for g, h in zip(got, got[1:] + [None]) if g == h and g in turns]
+        assert stops == order, got
+        for k, n in enumerate(turns):
+            assert lad.pos[k][0, 0] == pytest.approx(2 * math.pi * n)
+    with pytest.raises(ValueError, match="starts"):
+        LadderPlan(make_moves=None, per_turn=2, round_moves=1, rounds=2,
+                   equilibration_rounds=0, ramp_moves_per_turn=1, rung_equilibration_moves=0,
+                   frame_every=1, starts="sideways")

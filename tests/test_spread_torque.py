@@ -169,3 +169,32 @@ def test_torque_identity_flags_samples_that_are_not_boltzmann():
     assert good["converged"], good["convergence_reason"]
     bad = s.point_summary(seg, r_bad, cols)
     assert not bad["converged"] and "torque identity" in bad["convergence_reason"]
+
+
+def test_torque_identity_is_not_fooled_by_replica_means_that_agree_by_chance():
+    """Four replicas whose trap-torque means agree far better than their own samples allow
+    (each replica's samples shifted to the common mean 60, noise 290 per sample, 500
+    samples: within-replica SEM ~13 each, spread of the means 0) and a spread torque 20 pN nm
+    lower: the spread of the means alone would call it a violation (t ~ 30); with the
+    within-replica SEM as the floor t = 20 / 6.6 = 3 and, with 3 degrees of freedom, p ~ 0.06:
+    the identity holds. The same difference over 64 replicas (SEM 1.6) is flagged."""
+    from dnabraid.scenes import make_scene
+
+    rng = np.random.default_rng(11)
+    s = make_scene("braid", {"turns": [0.5]})
+
+    def reps(n):
+        out = []
+        for _ in range(n):
+            trap = rng.normal(0.0, 290.0, 500)
+            trap += 60.0 - trap.mean()
+            spread = rng.normal(40.0, 5.0, 500)
+            spread += 40.0 - spread.mean()
+            out.append(({"torque_pN_nm": trap, "torque_spread_pN_nm": spread}, {}))
+        return out
+
+    few = s.torque_identity(reps(4))
+    assert few["sem_between"] < 1e-6 and few["sem"] == pytest.approx(few["sem_within"])
+    assert abs(few["sem"] - 290.0 / math.sqrt(2000)) < 1.5 and few["holds"], few
+    many = s.torque_identity(reps(64))
+    assert not many["holds"] and many["t"] < -8, many

@@ -44,11 +44,15 @@ import numba
 import numpy as np
 
 __all__ = ["swap_map", "TrapLadder", "rung_turns", "LadderPlan", "run_ladder_replica",
-           "ladder_summary", "judge_ladder", "MIN_ROUND_TRIPS"]
+           "ladder_summary", "judge_ladder", "direction_split", "ramp_up", "ramp_down",
+           "start_direction", "LADDER_STARTS", "MIN_ROUND_TRIPS", "MIN_LADDERS_PER_END"]
 
 #: Round trips (a state carried from the lowest rung to the highest and back) every ladder
-#: must make before any of its points can be judged converged.
+#: must make before any of its points can be judged converged, unless the ladders were
+#: filled from both ends (:data:`MIN_LADDERS_PER_END` each; :func:`judge_ladder`).
 MIN_ROUND_TRIPS = 2
+#: Ladders filled from each end (``starts = alternate``) that stand in for round trips.
+MIN_LADDERS_PER_END = 2
 
 
 @numba.njit(cache=True)
@@ -158,6 +162,7 @@ class TrapLadder:
         self.tries = np.zeros(max(K - 1, 0), np.int64)
         self.accepted = np.zeros(max(K - 1, 0), np.int64)
         self.rounds = 0
+        self.trace: list = []  # ``who`` after each round (the states' walks over the rungs)
 
     def set_angle(self, theta: float) -> None:
         self.moves.energy.set_trap_angle(theta)
@@ -203,6 +208,7 @@ class TrapLadder:
             s = self.who[-1]
             if self._up[s] is True:
                 self._up[s] = False
+        self.trace.append(tuple(self.who))
         self.rounds += 1
 
     def acceptance(self) -> list:
@@ -231,6 +237,9 @@ class LadderPlan:
         Moves at each rung's angle after the ramp reaches it.
     frame_every : int
         Rounds between trajectory frames (and the per-frame observables).
+    starts : str
+        "alternate": odd replicas fill their ladder from the highest rung down
+        (:func:`ramp_down`), even ones from the lowest up; "up": all from below.
     make_moves : callable(model) -> PlectonemeMoves
         The Metropolis moves the ladder runs on a replica's model (the scene's mix and
         amplitudes).
@@ -244,6 +253,11 @@ class LadderPlan:
     ramp_moves_per_turn: int
     rung_equilibration_moves: int
     frame_every: int
+    starts: str = "alternate"
+
+    def __post_init__(self):
+        if self.starts not in LADDER_STARTS:
+            raise ValueError(f"starts must be one of {LADDER_STARTS}, not {self.starts!r}")
 
     def moves_per_replica(self, n_rungs: int) -> int:
         """Moves of one ladder after its ramp (the progress bar's unit)."""
@@ -254,24 +268,58 @@ class LadderPlan:
 RAMP_STAGE_MOVES = 2000
 
 
+def _ramp_to(ladder: TrapLadder, pos, now: float, n: float, plan: LadderPlan):
+    """Moves at trap angles stepped from ``now`` to ``n`` turns (``plan.ramp_moves_per_turn``
+    in stages of :data:`RAMP_STAGE_MOVES`), then ``rung_equilibration_moves`` at ``n``."""
+    stages = max(1, int(math.ceil(abs(n - now) * plan.ramp_moves_per_turn
+                                  / RAMP_STAGE_MOVES)))
+    if n != now:
+        for i in range(1, stages + 1):
+            ladder.set_angle(2 * math.pi * (now + (n - now) * i / stages))
+            pos, _ = ladder.moves.run(pos, RAMP_STAGE_MOVES)
+    ladder.set_angle(2 * math.pi * n)
+    if plan.rung_equilibration_moves:
+        pos, _ = ladder.moves.run(pos, plan.rung_equilibration_moves)
+    return pos
+
+
 def ramp_up(ladder: TrapLadder, start, plan: LadderPlan) -> None:
-    """Fill the rungs: the start (Lk = 0) ramped from 0 to the lowest rung, then from each
-    rung to the next, at ``plan.ramp_moves_per_turn``, with ``rung_equilibration_moves``
-    at each rung's angle; every rung's positions are the ramp's state at its angle."""
+    """Fill the rungs from below: the start (Lk = 0) ramped from 0 to the lowest rung, then
+    from each rung to the next, at ``plan.ramp_moves_per_turn``, with
+    ``rung_equilibration_moves`` at each rung's angle; every rung's positions are the
+    ramp's state at its angle."""
     pos = np.array(start, np.float64)
     now = 0.0
     for k, n in enumerate(ladder.turns):
-        stages = max(1, int(math.ceil(abs(n - now) * plan.ramp_moves_per_turn
-                                      / RAMP_STAGE_MOVES)))
-        if n != now:
-            for i in range(1, stages + 1):
-                ladder.set_angle(2 * math.pi * (now + (n - now) * i / stages))
-                pos, _ = ladder.moves.run(pos, RAMP_STAGE_MOVES)
-        ladder.set_angle(ladder.thetas[k])
-        if plan.rung_equilibration_moves:
-            pos, _ = ladder.moves.run(pos, plan.rung_equilibration_moves)
+        pos = _ramp_to(ladder, pos, now, n, plan)
         ladder.pos[k] = pos.copy()
         now = n
+
+
+def ramp_down(ladder: TrapLadder, start, plan: LadderPlan) -> None:
+    """Fill the rungs from above: the start (Lk = 0) ramped from 0 to the highest rung
+    without stopping at the others, then down from each rung to the next, as
+    :func:`ramp_up` but the other way. A ramp lags behind the angle (too little writhe on
+    the way up, too much on the way down), so ladders filled from both ends start on both
+    sides of equilibrium (Gelman & Rubin, Stat. Sci. 7, 457 (1992): overdispersed starts)
+    and a bias that the protocol leaves shows as disagreement between them."""
+    pos = np.array(start, np.float64)
+    now = 0.0
+    for k in reversed(range(len(ladder.turns))):
+        n = ladder.turns[k]
+        pos = _ramp_to(ladder, pos, now, n, plan)
+        ladder.pos[k] = pos.copy()
+        now = n
+
+
+#: The ends a ladder can be filled from (``LadderPlan.starts``): every replica from below,
+#: or replicas 0, 2, 4 ... from below and 1, 3, 5 ... from above.
+LADDER_STARTS = ("up", "alternate")
+
+
+def start_direction(plan: LadderPlan, r: int) -> str:
+    """"up" or "down": the end replica r's ladder is filled from."""
+    return "down" if plan.starts == "alternate" and r % 2 == 1 else "up"
 
 
 def run_ladder_replica(job, progress=None) -> dict:
@@ -295,7 +343,8 @@ def run_ladder_replica(job, progress=None) -> dict:
     rdir = os.path.join(out, "replicas", f"r{r:02d}")
     pdirs = [point_dir(rdir, seg) for seg in segs]
     rungs = rung_turns([seg.turns for seg in segs], plan.per_turn)
-    rec = {"kind": "the replica's own start, ramped up its ladder",
+    direction = start_direction(plan, r)
+    rec = {"kind": f"the replica's own start, ramped {direction} its ladder",
            "fingerprint": start_fingerprint(model.positions)}
     record = {"replica": r, "dirs": pdirs, "integrator_seed": None, "resumed": False,
               "pack": (r,), "starts_not_built": [], "starts": [dict(rec) for _ in segs]}
@@ -312,7 +361,7 @@ def run_ladder_replica(job, progress=None) -> dict:
     chain = np.asarray(model.chains[0])
     lad = TrapLadder(mv, chain, model.sides, model.bead_orientation, rungs, model.dna.kT,
                      seed=scene.seed)
-    ramp_up(lad, model.positions, plan)
+    (ramp_down if direction == "down" else ramp_up)(lad, model.positions, plan)
     K = len(rungs)
     step_moves = plan.round_moves * K
     for _ in range(plan.equilibration_rounds):
@@ -349,12 +398,14 @@ def run_ladder_replica(job, progress=None) -> dict:
     info = {"turns": rungs, "per_turn": plan.per_turn, "round_moves": plan.round_moves,
             "rounds": plan.rounds, "equilibration_rounds": plan.equilibration_rounds,
             "swap_acceptance": lad.acceptance(), "swap_attempts": lad.tries.tolist(),
-            "round_trips": lad.round_trips}
+            "round_trips": lad.round_trips, "start": direction}
     for p, w, seg in zip(pdirs, ws, segs):
         rundir.atomic_write_text(os.path.join(p, "moves.json"), json.dumps(moves) + "\n")
         rundir.atomic_write_text(os.path.join(p, "done.json"), json.dumps(
             {"turns": seg.turns, "step": plan.rounds * plan.round_moves,
              "frames": w.n_frames}) + "\n")
+    # the state on each rung after every round (rounds x rungs; the states' walks)
+    np.save(os.path.join(rdir, "ladder_who.npy"), np.asarray(lad.trace, np.int16))
     rundir.atomic_write_text(lpath, json.dumps(info) + "\n")
     return record
 
@@ -377,7 +428,31 @@ def ladder_summary(out: str, replicas) -> dict:
             "swap_acceptance_min": min(x for x in rates if x is not None) if att.size
             else None,
             "swap_acceptance": rates,
-            "round_trips": [i["round_trips"] for i in infos]}
+            "round_trips": [i["round_trips"] for i in infos],
+            "starts": [i.get("start", "up") for i in infos]}
+
+
+def direction_split(points: list, lad: dict, key: str = "extension_nm") -> None:
+    """Per point, the ladders filled from above against those filled from below: the
+    difference of their mean ``key`` (down - up) and Welch's t from the replica means
+    (added as ``point["ladder_direction"]``; None unless each end has two ladders). A
+    diagnostic beside R-hat, which already sees the same spread."""
+    starts = lad.get("starts") or []
+    up = [i for i, d in enumerate(starts) if d == "up"]
+    down = [i for i, d in enumerate(starts) if d == "down"]
+    for pt in points:
+        obs = pt.get(key) or {}
+        means = obs.get("replica_means")
+        if len(up) < 2 or len(down) < 2 or not means or len(means) != len(starts):
+            pt["ladder_direction"] = None
+            continue
+        a = np.array([means[i] for i in up], float)
+        b = np.array([means[i] for i in down], float)
+        se = math.sqrt(a.var(ddof=1) / len(a) + b.var(ddof=1) / len(b))
+        diff = float(b.mean() - a.mean())
+        pt["ladder_direction"] = {"observable": key, "down_minus_up": diff, "se": se,
+                                  "t": diff / se if se > 0 else None,
+                                  "ladders_up": len(up), "ladders_down": len(down)}
 
 
 def judge_ladder(points: list, lad: dict) -> None:
@@ -387,17 +462,25 @@ def judge_ladder(points: list, lad: dict) -> None:
     cannot see: measured on the default plectoneme (docs/validation.md 2.3o), n = 3 read
     182.2 +- 0.4 nm with R-hat 1.003 in ladders whose n = 5, 6 had not converged and which
     made 0-1 round trips, where moves-only chains (also continued from the ladders' own
-    states) give 180. A point is converged only if every point of the run is and every
-    ladder made at least :data:`MIN_ROUND_TRIPS` round trips."""
+    states) give 180. A point is converged only if every point of the run is, and either
+    every ladder made at least :data:`MIN_ROUND_TRIPS` round trips or the ladders were
+    filled from both ends, at least :data:`MIN_LADDERS_PER_END` from each (``starts =
+    alternate``): then a bias the filling leaves has opposite signs in the two groups and
+    R-hat across them sees it (Gelman & Rubin 1992)."""
     trips = min(lad["round_trips"]) if lad["round_trips"] else 0
+    starts = lad.get("starts") or []
+    ends = min(starts.count("up"), starts.count("down"))
+    direction_split(points, lad)
     bad = [pt.get("label", "") for pt in points if not pt["converged"]]
     why = []
     if bad:
         why.append(f"point(s) {', '.join(bad)} of the same ladders did not converge and the "
                    "swaps carry their states to every rung")
-    if trips < MIN_ROUND_TRIPS:
-        why.append(f"a ladder made {trips} round trip(s) (< {MIN_ROUND_TRIPS}): raise "
-                   "ladder_rounds or ladder_per_turn's spacing")
+    if trips < MIN_ROUND_TRIPS and ends < MIN_LADDERS_PER_END:
+        why.append(f"a ladder made {trips} round trip(s) (< {MIN_ROUND_TRIPS}) and "
+                   f"{ends} ladder(s) were filled from the scarcer end (< "
+                   f"{MIN_LADDERS_PER_END}): set ladder_starts = alternate with replicas >= "
+                   f"{2 * MIN_LADDERS_PER_END}, or raise ladder_rounds")
     for pt in points:
         pt["ladder"] = lad
         if why and pt["converged"]:

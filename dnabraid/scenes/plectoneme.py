@@ -39,7 +39,7 @@ from ..forces.twist_frames import (
     twist_force,
 )
 from ..geometry.ribbon import writhe_open
-from ..run.ladder import LadderPlan, rung_turns
+from ..run.ladder import LADDER_STARTS, LadderPlan, rung_turns
 from ..run.twist_moves import SWEEP_NM, PlectonemeMoves
 from .base import SceneError, key
 from .tweezer_base import TurnedScene
@@ -161,6 +161,11 @@ class Plectoneme(TurnedScene):
                                   "swap phases")
     ladder_frame_every: int = key(10, "rounds", "sampler = ladder: rounds between trajectory "
                                   "frames (and the per-frame observables: Tw, Wr, plectonemes)")
+    ladder_starts: str = key("alternate", "", "sampler = ladder: alternate: odd replicas fill "
+                             "their ladder from the highest rung down, even ones from the "
+                             "lowest up, so that R-hat across them sees a bias the filling "
+                             "leaves (needed for a verdict when the ladders make < 2 round "
+                             "trips); up: every replica from below")
 
     def validate(self) -> None:
         super().validate()
@@ -172,6 +177,8 @@ class Plectoneme(TurnedScene):
                 need(getattr(self, k) >= 1, k, "must be >= 1")
             need(self.ladder_equilibration_rounds >= 0, "ladder_equilibration_rounds",
                  "must be >= 0")
+            need(self.ladder_starts in LADDER_STARTS, "ladder_starts",
+                 f"allowed: {', '.join(LADDER_STARTS)}")
             need(self.ladder_rounds >= 2 * self.ladder_frame_every, "ladder_rounds",
                  f"must be >= 2 x ladder_frame_every = {2 * self.ladder_frame_every}")
             need(self.stretch == "bonds", "sampler",
@@ -307,7 +314,8 @@ class Plectoneme(TurnedScene):
                           equilibration_rounds=self.ladder_equilibration_rounds,
                           ramp_moves_per_turn=LADDER_RAMP_MOVES_PER_TURN,
                           rung_equilibration_moves=LADDER_RUNG_EQ_MOVES,
-                          frame_every=self.ladder_frame_every)
+                          frame_every=self.ladder_frame_every,
+                          starts=self.ladder_starts)
 
     def ladder_moves(self, model) -> PlectonemeMoves:
         """The scene's moves (its amplitudes and mix) on the replica's own LocalEnergy."""
