@@ -141,8 +141,10 @@ def _exact(turns, L=60.0, F=2.0, n_draws=8000, batches=20, seed=2):
 
 def test_ladder_run_samples_each_rung_against_exact_draws(tmp_path):
     """``sampler = ladder`` through the driver (two independent ladders, rungs 0, 1/6, 1/3,
-    1/2; the default ``ladder_starts = alternate`` fills the second from the top): <z> at turns 0 and 0.5 within 4 SE of the exact reweighted draws, every point's
-    linking number on its turns, swaps accepted, the step column counting moves."""
+    1/2; the default ``ladder_starts = alternate`` fills the second from the top): <z> at
+    turns 0 and 0.5 within 4 SE of the exact reweighted draws (measured z = -2.1, -0.7),
+    every point's linking number on its turns, swaps accepted, the step column counting
+    moves."""
     turns = [0.0, 0.5]
     s = make_scene("plectoneme", {"length_nm": 60.0, "force_pN": 2.0, "turns": turns,
                                   "surface": False, "sampler": "ladder", "replicas": 2,

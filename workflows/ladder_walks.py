@@ -125,7 +125,8 @@ def table(res: dict) -> str:
                        else f"{x['msd_ideal'][str(g)]:.2f}" for g in LAGS)
         lines.append(f"| {x['replica']} | {x['start']} | {x['rungs']} x {x['rounds']} | "
                      f"{x['acceptance_min']:.2f} / {x['acceptance_mean']:.2f} | "
-                     f"{x['round_trips']} ({x['round_trips_ideal']}; {x['round_trips_syed']:.0f}) | "
+                     f"{x['round_trips']} ({x['round_trips_ideal']}; "
+                     f"{x['round_trips_syed']:.0f}) | "
                      f"{x['range_median']:.0f} ({x['range_median_ideal']:.0f}) | "
                      f"{m} ({mi}) |")
     lines.append("ideal: the same acceptances, each swap accepted independently of the "
