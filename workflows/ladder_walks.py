@@ -19,7 +19,8 @@ state's writhe across the ladder, and the acceptance alone does not predict them
 
 Reported per run: per ladder the round trips (measured and ideal), and over the states the
 median range of rungs visited and the rung's mean squared displacement at lags of 1, 10,
-100 rounds (measured and ideal).
+100 rounds, and at 100 rounds from rungs in the upper half of the ladder (past buckling on
+the default hat curve), measured and ideal.
 
     python workflows/ladder_walks.py RUN_DIR [RUN_DIR ...]
 
@@ -85,6 +86,15 @@ def msd(rungs: np.ndarray, lag: int) -> float | None:
     return float(np.mean(d.astype(float) ** 2))
 
 
+def msd_from(rungs: np.ndarray, lag: int, lo: int) -> float | None:
+    """As :func:`msd`, only over starting points at rungs >= ``lo``."""
+    if lag >= rungs.shape[0]:
+        return None
+    a, b = rungs[:-lag], rungs[lag:]
+    sel = a >= lo
+    return float(np.mean((b[sel] - a[sel]).astype(float) ** 2)) if sel.any() else None
+
+
 def walks(run: str, seed: int = 1) -> dict:
     rdirs = sorted(d for d in os.listdir(os.path.join(run, "replicas")) if d.startswith("r"))
     rng = np.random.default_rng(seed)
@@ -109,15 +119,22 @@ def walks(run: str, seed: int = 1) -> dict:
             "range_median": float(np.median(meas.max(0) - meas.min(0))),
             "range_median_ideal": float(np.median(ideal.max(0) - ideal.min(0))),
             "msd": {str(g): msd(meas, g) for g in LAGS},
-            "msd_ideal": {str(g): msd(ideal, g) for g in LAGS}})
+            "msd_ideal": {str(g): msd(ideal, g) for g in LAGS},
+            "msd_upper_half_100": msd_from(meas, 100, K // 2),
+            "msd_upper_half_100_ideal": msd_from(ideal, 100, K // 2)})
     return out
+
+
+def _f(x) -> str:
+    return "-" if x is None else f"{x:.1f}"
 
 
 def table(res: dict) -> str:
     lines = [f"# {res['run']}",
              "| ladder | start | rungs x rounds | acceptance min / mean | round trips "
              "(ideal; Syed) | median rungs visited (ideal) | MSD rungs^2 at 1, 10, 100 rounds "
-             "(ideal) |", "|---|---|---|---|---|---|---|"]
+             "(ideal) | MSD at 100 rounds from the upper half (ideal) |",
+             "|---|---|---|---|---|---|---|---|"]
     for x in res["ladders"]:
         m = ", ".join("-" if x["msd"][str(g)] is None else f"{x['msd'][str(g)]:.2f}"
                       for g in LAGS)
@@ -128,7 +145,8 @@ def table(res: dict) -> str:
                      f"{x['round_trips']} ({x['round_trips_ideal']}; "
                      f"{x['round_trips_syed']:.0f}) | "
                      f"{x['range_median']:.0f} ({x['range_median_ideal']:.0f}) | "
-                     f"{m} ({mi}) |")
+                     f"{m} ({mi}) | {_f(x['msd_upper_half_100'])} "
+                     f"({_f(x['msd_upper_half_100_ideal'])}) |")
     lines.append("ideal: the same acceptances, each swap accepted independently of the "
                  "state (seeded); round trips counted as TrapLadder counts them")
     return "\n".join(lines) + "\n"

@@ -27,7 +27,11 @@ trips (a state carried from the lowest rung to the highest and back). For ``dnab
 (:func:`run_ladder_replica`) one replica is one independent ladder from its own start; the
 driver judges a ladder run's points together (:func:`judge_ladder`): swaps carry states
 between all rungs, so one rung that has not converged biases the others alike in every
-ladder (docs/validation.md 2.3o).
+ladder (docs/validation.md 2.3o). Replicas fill their ladders from both ends by default
+(:func:`ramp_up`, :func:`ramp_down`), so that R-hat across them sees a bias the filling
+leaves; the states' walks over the rungs are saved for ``workflows/ladder_walks.py``. Past
+buckling a state's rung follows its writhe, which only the moves change, so round trips
+are rare on long ladders (docs/validation.md 2.3p).
 """
 
 from __future__ import annotations
@@ -459,10 +463,9 @@ def judge_ladder(points: list, lad: dict) -> None:
     """Judge a ladder run's points together (adds ``ladder`` to each point). Swaps carry
     states between all rungs, so a rung that has not converged biases the others, and
     independent ladders run by one protocol can share that bias, which R-hat across them
-    cannot see: measured on the default plectoneme (docs/validation.md 2.3o), n = 3 read
-    182.2 +- 0.4 nm with R-hat 1.003 in ladders whose n = 5, 6 had not converged and which
-    made 0-1 round trips, where moves-only chains (also continued from the ladders' own
-    states) give 180. A point is converged only if every point of the run is, and either
+    cannot see (docs/validation.md 2.3o suspected this of the default plectoneme's n = 3;
+    2.3p found the same reading in ladders filled from above, so the offset there has
+    another cause). A point is converged only if every point of the run is, and either
     every ladder made at least :data:`MIN_ROUND_TRIPS` round trips or the ladders were
     filled from both ends, at least :data:`MIN_LADDERS_PER_END` from each (``starts =
     alternate``): then a bias the filling leaves has opposite signs in the two groups and
