@@ -330,7 +330,9 @@ def run_ladder_replica(job, progress=None) -> dict:
     """One replica of a ladder run: ``job`` = (scene, replica index, run directory). The
     replica's own model and start (its seed), one :class:`TrapLadder` through the scene's
     turns, and the requested points written as a thermal run's are
-    (``replicas/rNN/points/<tag>/``: samples, frames, trajectory, moves.json, done.json),
+    (``replicas/rNN/points/<tag>/``: samples, frames, trajectory, moves.json, done.json;
+    ``replicas/rNN/ladder.json``: rungs, acceptance, round trips, the end it was filled
+    from; ``replicas/rNN/ladder_who.npy``: the state on each rung after every round),
     so that the driver summarises and judges them as any other run. The step column counts
     the rung's moves. Returns the driver's per-replica record."""
     from .. import rundir
