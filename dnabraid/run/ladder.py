@@ -57,6 +57,9 @@ __all__ = ["swap_map", "TrapLadder", "rung_turns", "LadderPlan", "run_ladder_rep
 MIN_ROUND_TRIPS = 2
 #: Ladders filled from each end (``starts = alternate``) that stand in for round trips.
 MIN_LADDERS_PER_END = 2
+#: The ends a ladder can be filled from (``LadderPlan.starts``): every replica from below,
+#: or replicas 0, 2, 4 ... from below and 1, 3, 5 ... from above.
+LADDER_STARTS = ("up", "alternate")
 
 
 @numba.njit(cache=True)
@@ -314,11 +317,6 @@ def ramp_down(ladder: TrapLadder, start, plan: LadderPlan) -> None:
         pos = _ramp_to(ladder, pos, now, n, plan)
         ladder.pos[k] = pos.copy()
         now = n
-
-
-#: The ends a ladder can be filled from (``LadderPlan.starts``): every replica from below,
-#: or replicas 0, 2, 4 ... from below and 1, 3, 5 ... from above.
-LADDER_STARTS = ("up", "alternate")
 
 
 def start_direction(plan: LadderPlan, r: int) -> str:
