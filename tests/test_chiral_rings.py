@@ -189,3 +189,75 @@ def dataclass_replace(obj, **kw):
     import dataclasses
 
     return dataclasses.replace(obj, **kw)
+
+
+# -- the apolar fold, contact partners, Michell's threshold, continuation (session 14) ------
+
+def _reversed_ring2(x, prob):
+    y = x.copy()
+    sl = prob.ring(1)
+    y[sl] = x[sl][::-1]
+    return y
+
+
+def test_chiral_energy_is_apolar():
+    """DNA is apolar: reversing ring 2's direction (every t_j -> -t_j, an antiparallel
+    contact) leaves the folded term unchanged (docs/chirality.md, Eq. C3); tan(eta/2) itself
+    diverges there."""
+    model = cr.ChiralRings(lk_ring=0.0, alpha_B_per_L2=700.0, **SMALL)
+    prob, x = _perturbed(model, amp=0.1)
+    E = cr.chiral_energy_gradient(x, prob, want_grad=False)[0]
+    Er = cr.chiral_energy_gradient(_reversed_ring2(x, prob), prob, want_grad=False)[0]
+    assert E > 0
+    assert Er == pytest.approx(E, rel=1e-12)
+
+
+def test_partner_window_finds_the_global_closest_point():
+    model = cr.ChiralRings(lk_ring=0.0, **SMALL)
+    prob, x = _perturbed(model, amp=0.05)
+    E_global = cr.bilateral_energy_gradient(x, prob, want_grad=False)[0]
+    seg, u, _, d_global, _ = cr.closest_on_other_ring(x, prob, cr.bilateral_candidates(x, prob))
+    cr.update_partners(x, prob)
+    assert prob.partner is not None
+    d_window = cr.closest_on_other_ring(x, prob, cr.bilateral_candidates(x, prob))[3]
+    np.testing.assert_allclose(d_window, d_global, rtol=0, atol=1e-14)
+    assert cr.bilateral_energy_gradient(x, prob, want_grad=False)[0] == pytest.approx(
+        E_global, rel=1e-12)
+    # partners lie on the other ring
+    assert np.all(prob.ring_of[prob.partner] != prob.ring_of)
+
+
+@pytest.fixture(scope="module")
+def small_circles():
+    r = cr.solve(cr.ChiralRings(lk_ring=0.0, start_noise=0.0, **SMALL), stability=False)
+    assert r["converged"]
+    return r
+
+
+@pytest.mark.parametrize("sign", [1.0, -1.0])
+def test_twisted_circles_buckle_at_michells_threshold(small_circles, sign):
+    """The twisted circles are an equilibrium at every Lk_i; they lose stability where
+    C Tw / B = sqrt(3) (Michell 1889; Zajac 1962): the ply of two rings has twice a ring's
+    bending stiffness and carries twice its twisting moment, so the threshold is a single
+    ring's, Lk_i = sqrt(3)/1.5 = 1.155. Bracket +-5 % (the pair's link splits the threshold
+    of the two hands by O(Delta/L): measured at Delta/L = 0.05, 40 beads per ring, the zero
+    lies at +1.170 and -1.151; at the seed's 0.02 at +1.157)."""
+    lk_m = math.sqrt(3) / cr.DNA_TWIST_OVER_BEND
+    lam = {}
+    for f in (0.95, 1.05):
+        prob = cr.make_problem(cr.ChiralRings(lk_ring=sign * f * lk_m, **SMALL))
+        lam[f] = cr.lowest_modes(small_circles["x"], prob)[0][0]
+    assert lam[0.95] > 0 > lam[1.05]
+
+
+def test_continuation_follows_the_twisted_circles(small_circles):
+    """Below Michell's threshold the continued rings stay circles: T1 = 2 pi C Lk_i / L."""
+    model = cr.ChiralRings(lk_ring=0.0, start_noise=0.0, **SMALL)
+    rows = list(cr.continuation(model, small_circles, "lk_ring", 0.5, 0.25, stability=False))
+    assert [r["parameter_value"] for r in rows] == [0.25, 0.5]
+    for r in rows:
+        assert not r["branch_left"]
+        assert r["torque_per_ring_B_per_L"][0] == pytest.approx(
+            2 * math.pi * cr.DNA_TWIST_OVER_BEND * r["parameter_value"], abs=1e-6)
+    with pytest.raises(UserError, match="parameter"):
+        next(cr.continuation(model, small_circles, "n", 1.0, 0.25))

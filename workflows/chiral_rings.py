@@ -2,21 +2,30 @@
 
 Two rings of length L linked once (Hopf link, Lk_12 = -1, left-handed: the Villarceau
 start of slide 14), Delta/L = 0.02, C/B = 1.5, bilateral contact, chiral term
-phi = alpha tan(eta/2) (dnabraid.statics.chiral_rings). For each ring linking number
-Lk_i in (-1, 1, 3, 5): continue in Lk_i at alpha = 0 from the twist-free rings, then in
-alpha from 0 up to 3500 B/L^2, recording T1 = 2 pi C (Lk_1 - Wr_1)/L (ring 1's twisting
-moment, B/L), the writhes, the contact's braid angle eta and the lowest eigenvalue of the
-Hessian (rigid and sliding modes projected out). The branches run in parallel processes;
-each writes its rows as it goes.
+phi = alpha tan(eta/2) along the contact (dnabraid.statics.chiral_rings). Natural-parameter
+continuation (``chiral_rings.continuation``):
+
+* the Lk scan: at alpha = 0, each ring's Lk_i from 0 to +5 and to -1 in steps of 1/4
+  (halved where Newton does not converge); the circles buckle at Michell's threshold and
+  the pair jumps to a writhed, self-touching branch;
+* the alpha scans: from the alpha = 0 state at Lk_i = 5 (the slide's case), -1 and +1,
+  alpha up to 3500 B/L^2 and down to -1000 (slide 32's axis) in steps of 250.
+
+Each row: T1 = 2 pi C (Lk_1 - Wr_1)/L (ring 1's twisting moment, B/L), the writhes, the
+contact's braid angle eta, the lowest eigenvalue of the Hessian (rigid and sliding modes
+projected out), whether the branch was left (a jump). The scans run in parallel processes
+and write their rows as they go (``chiral_rings.work/*.jsonl``); ``--assemble`` writes the
+results from those logs.
 
 Writes workflows/results/chiral_rings.json, chiral_rings.md, chiral_rings.png.
-Run: nice -n 5 python workflows/chiral_rings.py [--quick]
+Run: OMP_NUM_THREADS=1 python workflows/chiral_rings.py [--workers 2]
 """
 
 from __future__ import annotations
 
 import argparse
 import json
+import math
 import multiprocessing as mp
 import pathlib
 import sys
@@ -27,15 +36,19 @@ import numpy as np
 from dnabraid.statics import chiral_rings as cr
 
 OUT = pathlib.Path(__file__).parent / "results"
-WORK = OUT / "chiral_rings.work"   # per-branch logs and bead positions (not committed)
-LADDER = (-1.0, 1.0, 3.0, 5.0)
-ALPHAS = (0.0, 500.0, 1000.0, 2000.0, 3500.0)
-ALPHAS_LK_M1 = (0.0, 100.0, 200.0, 500.0, 1000.0, 2000.0, 3500.0)
+WORK = OUT / "chiral_rings.work"   # per-scan logs and bead positions (not committed)
+LK_STEP = 0.25
+ALPHA_STEP = 250.0
+ALPHA_MAX, ALPHA_MIN = 3500.0, -1000.0
+#: (name, Lk_i targets of the alpha = 0 scan, the Lk_i whose alpha scans follow)
+SCANS = (("lk_up", (3.0, 5.0), (5.0,)), ("lk_down", (-1.0,), (-1.0,)),
+         ("lk_one", (1.0,), (1.0,)))
 
-#: Slide 32 read off by eye from the talk's plot (axes: alpha -1000 ... 3500 B/L^2,
-#: T1 0 ... -12; inset alpha 1000-3500, T1 -1 ... -2). The seed is a text extraction
-#: without the curves: only the axis ranges and branch labels are certain. These points
-#: are the inset's range (the branch drawn through it) and are labelled "read-off".
+#: Slide 32 as far as the seed's text extraction carries it: tick labels and branch letters,
+#: no curve data. Main axes alpha -1000 ... 3500 B/L^2, T1 0 ... -12; inset alpha
+#: 1000-3500, T1 -1 ... -2; branches a-f; "Material frames closed with linking numbers
+#: Lk_i = 5"; "Transition from left-handed (Lk = -1) to right-handed link (Lk = 1);
+#: Lk_i = 5 + 2 = 7".
 SLIDE32_READ_OFF = {
     "axes": {"alpha_B_per_L2": [-1000, 3500], "T1_B_per_L": [-12, 0]},
     "inset": {"alpha_B_per_L2": [1000, 3500], "T1_B_per_L": [-2.0, -1.0]},
@@ -44,9 +57,10 @@ SLIDE32_READ_OFF = {
 }
 
 
-def row(lk, alpha, r, prob) -> dict:
+def row(phase, r) -> dict:
+    lam = r.get("lowest_eigenvalues_B_per_L3")
     return {
-        "lk_ring": lk, "alpha_B_per_L2": alpha,
+        "phase": phase, "lk_ring": r["lk"], "alpha_B_per_L2": r["alpha"],
         "T1_B_per_L": r["torque_per_ring_B_per_L"][0],
         "T2_B_per_L": r["torque_per_ring_B_per_L"][1],
         "twist_per_ring": r["twist_per_ring"], "writhe_per_ring": r["writhe_per_ring"],
@@ -54,96 +68,130 @@ def row(lk, alpha, r, prob) -> dict:
         "eta_mean_rad": r["eta_mean_rad"], "eta_min_rad": r["eta_min_rad"],
         "eta_max_rad": r["eta_max_rad"], "contact_fraction": r["contact_fraction"],
         "pulling_fraction": r["pulling_fraction"],
-        "lowest_eigenvalues_B_per_L3": r.get("lowest_eigenvalues_B_per_L3"),
+        "max_overlap_over_diameter": r["max_overlap_over_diameter"],
+        "lowest_eigenvalues_B_per_L3": lam,
         "energy_B_per_L": r["energy_B_per_L"],
         "energy_terms_B_per_L": r["energy_terms_B_per_L"],
         "converged": r["converged"], "iterations": r["iterations"],
         "max_gradient_B_per_L2": r["max_gradient_B_per_L2"],
+        "saddle_escapes": r.get("saddle_escapes", 0), "jump": r.get("jump", 0.0),
+        "branch_left": r.get("branch_left", False), "step": r.get("step"),
         "wall_time_s": r["wall_time_s"],
     }
 
 
-def branch(args) -> list:
-    lk_target, alphas, quick = args
+def _log(name):
+    return WORK / f"{name}.jsonl"
+
+
+def scan(job) -> str:
+    """One process: the alpha = 0 Lk scan to each target, then the alpha scans."""
+    name, lk_targets, alpha_lks = job
     WORK.mkdir(parents=True, exist_ok=True)
-    log = WORK / f"branch_{lk_target:+.0f}.jsonl"
+    log = _log(name)
     log.write_text("")
     t0 = time.perf_counter()
-    max_iter = 60 if quick else 120
 
     def say(msg):
-        print(f"[Lk={lk_target:+.0f} {time.perf_counter() - t0:6.0f}s] {msg}", flush=True)
+        print(f"[{name} {time.perf_counter() - t0:6.0f}s] {msg}", flush=True)
 
-    m = cr.ChiralRings(lk_ring=0.0, alpha_B_per_L2=0.0)
-    r = cr.solve(m, stability=False, max_iter=max_iter)
-    x = r["x"]
-    say(f"twist-free rings: Wr = {r['writhe_per_ring'][0]:+.4f}, eta = "
-        f"{r['eta_mean_rad']:+.4f} rad, {r['iterations']} it")
-    # the twisted circles are an equilibrium for every Lk_i; past Michell's threshold
-    # (Tw C/B > sqrt 3) they are a saddle, which solve() leaves along its negative mode
-    rows = []
-    prob = None
-    for a in alphas:
-        m = cr.ChiralRings(lk_ring=lk_target, alpha_B_per_L2=a)
-        r = cr.solve(m, x, max_iter=max_iter)
-        x = r["x"]
-        rw = row(lk_target, a, r, prob)
-        rows.append(rw)
+    def keep(phase, r, lk, alpha):
+        r["lk"], r["alpha"] = lk, alpha
+        rw = row(phase, r)
         with log.open("a") as fh:
             fh.write(json.dumps(rw) + "\n")
-        np.save(WORK / f"x_{lk_target:+.0f}_{a:.0f}.npy", x)
-        say(f"alpha {a:6.0f}: T1 = {rw['T1_B_per_L']:+.3f} B/L, Wr = "
-            f"{rw['writhe_per_ring'][0]:+.3f}, eta = {rw['eta_mean_rad']:+.4f} rad "
-            f"[{rw['eta_min_rad']:+.3f}, {rw['eta_max_rad']:+.3f}], lam_min = "
-            f"{rw['lowest_eigenvalues_B_per_L3'][0]:.3g} B/L^3, conv {rw['converged']} "
-            f"({rw['iterations']} it)")
-    return rows
+        lam = rw["lowest_eigenvalues_B_per_L3"]
+        say(f"{phase} Lk {lk:+.3f} alpha {alpha:7.1f}: T1 {rw['T1_B_per_L']:+.3f} B/L, "
+            f"Wr {rw['writhe_per_ring'][0]:+.3f}/{rw['writhe_per_ring'][1]:+.3f}, eta "
+            f"{rw['eta_mean_rad']:+.4f} [{rw['eta_min_rad']:+.3f}, {rw['eta_max_rad']:+.3f}]"
+            f", lam {lam[0] if lam else float('nan'):.3g}, conv {rw['converged']} "
+            f"({rw['iterations']} it, g {rw['max_gradient_B_per_L2']:.2g}), "
+            f"left {rw['branch_left']}")
+
+    m = cr.ChiralRings(lk_ring=0.0, alpha_B_per_L2=0.0)
+    r = cr.solve(m)
+    keep("lk", r, 0.0, 0.0)
+    states = {}
+    for lk in lk_targets:
+        for q in cr.continuation(m, r, "lk_ring", lk, LK_STEP, max_iter=300):
+            keep("lk", q, q["parameter_value"], 0.0)
+            r = q
+        m = cr.ChiralRings(lk_ring=lk, alpha_B_per_L2=0.0)
+        states[lk] = r
+        np.save(WORK / f"x_lk{lk:+.0f}_a0.npy", r["x"])
+        np.save(WORK / f"partner_lk{lk:+.0f}_a0.npy", r["partner"])
+    for lk in alpha_lks:
+        m0 = cr.ChiralRings(lk_ring=lk, alpha_B_per_L2=0.0)
+        for target, phase in ((ALPHA_MAX, "alpha_up"), (ALPHA_MIN, "alpha_down")):
+            for q in cr.continuation(m0, states[lk], "alpha_B_per_L2", target, ALPHA_STEP,
+                                     max_iter=300):
+                keep(phase, q, lk, q["parameter_value"])
+                np.save(WORK / f"x_lk{lk:+.0f}_a{q['parameter_value']:.0f}.npy", q["x"])
+    return name
 
 
-def buckling(rows) -> dict:
-    """First alpha bracket where lam_min changes sign or the writhe jumps (> 0.2 turns)."""
-    for a, b in zip(rows[:-1], rows[1:]):
-        la, lb = a["lowest_eigenvalues_B_per_L3"][0], b["lowest_eigenvalues_B_per_L3"][0]
-        jump = abs(b["writhe_per_ring"][0] - a["writhe_per_ring"][0])
-        if la > 0 >= lb or jump > 0.2:
-            alpha_lin = (a["alpha_B_per_L2"] + (b["alpha_B_per_L2"] - a["alpha_B_per_L2"])
-                         * la / (la - lb)) if la > 0 > lb else None
-            return {"bracket_B_per_L2": [a["alpha_B_per_L2"], b["alpha_B_per_L2"]],
-                    "writhe_jump": jump, "lam_min_zero_interpolated_B_per_L2": alpha_lin}
-    return {"bracket_B_per_L2": None, "note": "no sign change or writhe jump on the "
-            "alphas reached"}
+def instabilities(rows) -> list:
+    """Where a scan left its branch: the two parameter values bracketing it and the zero of
+    the lowest eigenvalue extrapolated linearly from the last two rows before it."""
+    out = []
+    for k in range(1, len(rows)):
+        b = rows[k]
+        if not b["branch_left"]:
+            continue
+        a = rows[k - 1]
+        par = "lk_ring" if b["phase"] == "lk" else "alpha_B_per_L2"
+        rec = {"phase": b["phase"], "bracket": [a[par], b[par]], "parameter": par,
+               "writhe_before": a["writhe_per_ring"][0], "writhe_after": b["writhe_per_ring"][0]}
+        if k >= 2 and rows[k - 2]["phase"] == a["phase"]:
+            p0, p1 = rows[k - 2][par], a[par]
+            l0 = rows[k - 2]["lowest_eigenvalues_B_per_L3"][0]
+            l1 = a["lowest_eigenvalues_B_per_L3"][0]
+            if l0 != l1 and p1 != p0:
+                rec["lam_zero_extrapolated"] = float(p1 - l1 * (p1 - p0) / (l1 - l0))
+        out.append(rec)
+    return out
+
+
+def _fmt_row(r, par):
+    lam = r["lowest_eigenvalues_B_per_L3"]
+    return (f"| {r[par]:+.3f} | {r['T1_B_per_L']:+.3f} | {r['twist_per_ring'][0]:+.3f} | "
+            f"{r['writhe_per_ring'][0]:+.3f} | {r['eta_mean_rad']:+.4f} | "
+            f"{r['eta_min_rad']:+.3f} / {r['eta_max_rad']:+.3f} | {lam[0]:.3g} | "
+            f"{r['energy_B_per_L']:.2f} | {r['max_gradient_B_per_L2']:.1e} | "
+            f"{'yes' if r['branch_left'] else ''} |")
 
 
 def write_md(res) -> str:
+    head = ("| {p} | T1 (B/L) | Tw_1 | Wr_1 | eta mean (rad) | eta min / max | lam_min (B/L^3) "
+            "| E (B/L) | max grad (B/L^2) | branch left |")
+    sep = "|---|---|---|---|---|---|---|---|---|---|"
     L = ["# The seed's chiral linked rings at T = 0 (`workflows/chiral_rings.py`)", "",
          "Two rings of length L, Hopf link (Lk_12 = -1, left-handed), Delta/L = 0.02, "
          f"C/B = {cr.DNA_TWIST_OVER_BEND}, bilateral contact, b = Delta/2 (100 beads per "
-         "ring), phi = alpha tan(eta/2) per unit contact length (weight 1 at contact, C^2 "
-         "decay over Delta/2). T1 = 2 pi C (Lk_1 - Wr_1)/L (ring 1's twisting moment, B/L); "
-         "eta: mean braid angle over ring 1's beads in contact (rad, > 0 left-handed); "
-         "lam_min: lowest Hessian eigenvalue (B/L^3) with rigid and sliding modes projected "
-         "out. Units B = L = 1.", ""]
-    for lk, rows in res["branches"].items():
-        L += [f"## Lk_i = {lk}", "",
-              "| alpha (B/L^2) | T1 (B/L) | Tw_1 | Wr_1 | eta mean | eta min | eta max | "
-              "lam_min | E (B/L) | conv |", "|---|---|---|---|---|---|---|---|---|---|"]
-        for r in rows:
-            L.append(f"| {r['alpha_B_per_L2']:.0f} | {r['T1_B_per_L']:+.3f} | "
-                     f"{r['twist_per_ring'][0]:+.3f} | {r['writhe_per_ring'][0]:+.3f} | "
-                     f"{r['eta_mean_rad']:+.4f} | {r['eta_min_rad']:+.3f} | "
-                     f"{r['eta_max_rad']:+.3f} | {r['lowest_eigenvalues_B_per_L3'][0]:.3g} | "
-                     f"{r['energy_B_per_L']:.2f} | {r['converged']} |")
-        L += ["", f"Buckling: {json.dumps(res['buckling'][lk])}", ""]
-    L += ["## Ladder", "", "| Lk_i | eta at alpha=0 (rad) | Tw_1 at alpha=0 | T1 at alpha=0 "
-          "(B/L) | buckling alpha bracket (B/L^2) |", "|---|---|---|---|---|"]
-    for lk, rows in res["branches"].items():
-        r0 = rows[0]
-        L.append(f"| {lk} | {r0['eta_mean_rad']:+.4f} | {r0['twist_per_ring'][0]:+.3f} | "
-                 f"{r0['T1_B_per_L']:+.3f} | {res['buckling'][lk]['bracket_B_per_L2']} |")
-    L += ["", f"Wall time {res['wall_time_s']:.0f} s (summed solver time of the longest "
-          "branch when assembled from the logs). "
-          + ("" if res.get("complete", True) else "PARTIAL: assembled from the branch logs of "
-             "an interrupted run; the missing alphas were not reached."), ""]
+         "ring), phi = alpha tan(eta/2) per unit contact length (weight 1 at contact, "
+         "apolar fold, pairs along the contact partners). T1 = 2 pi C (Lk_1 - Wr_1)/L "
+         "(ring 1's twisting moment, B/L); eta: mean braid angle over ring 1's beads in "
+         "contact with their partners (rad, > 0 left-handed); lam_min: lowest Hessian "
+         "eigenvalue with rigid and sliding modes projected out; max grad: the largest "
+         f"force component left (target {res.get('gtol', 2.6e-6):.1e} B/L^2; a row is "
+         "accepted below 100x the target when Newton stalls). Units B = L = 1.", ""]
+    for name, rows in res["scans"].items():
+        lk_rows = [r for r in rows if r["phase"] == "lk"]
+        if lk_rows:
+            L += [f"## {name}: Lk_i at alpha = 0", "", head.format(p="Lk_i"), sep]
+            L += [_fmt_row(r, "lk_ring") for r in lk_rows]
+            L.append("")
+        for phase in ("alpha_up", "alpha_down"):
+            ar = [r for r in rows if r["phase"] == phase]
+            if ar:
+                L += [f"## {name}: alpha at Lk_i = {ar[0]['lk_ring']:+.0f} ({phase})", "",
+                      head.format(p="alpha (B/L^2)"), sep]
+                L += [_fmt_row(r, "alpha_B_per_L2") for r in ar]
+                L.append("")
+        L += [f"Branches left ({name}): {json.dumps(res['instabilities'][name])}", ""]
+    L += [f"Wall time {res['wall_time_s']:.0f} s (the longest scan). "
+          + ("" if res.get("complete", True) else "PARTIAL: assembled from the logs of an "
+             "interrupted run; the missing rows were not reached."), ""]
     return "\n".join(L)
 
 
@@ -153,35 +201,57 @@ def plot(res, path):
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    fig, ax = plt.subplots(1, 2, figsize=(11, 4.2))
-    for lk, rows in res["branches"].items():
-        a = [r["alpha_B_per_L2"] for r in rows]
-        ax[0].plot(a, [r["T1_B_per_L"] for r in rows], "o-", label=f"Lk_i = {lk}")
-        ax[1].plot(a, [r["eta_mean_rad"] for r in rows], "o-", label=f"Lk_i = {lk}")
+    fig, ax = plt.subplots(1, 3, figsize=(15, 4.4))
+    for name, rows in res["scans"].items():
+        lk_rows = [r for r in rows if r["phase"] == "lk"]
+        ax[0].plot([r["lk_ring"] for r in lk_rows], [r["writhe_per_ring"][0] for r in lk_rows],
+                   "o-", ms=3, label=f"Wr_1 ({name})")
+        ax[0].plot([r["lk_ring"] for r in lk_rows], [r["T1_B_per_L"] / (2 * math.pi)
+                                                     for r in lk_rows],
+                   "s--", ms=3, label=f"T1/(2 pi) ({name})")
+        for phase, mk in (("alpha_up", "o-"), ("alpha_down", "o-")):
+            ar = sorted([r for r in rows if r["phase"] == phase] + [
+                r for r in lk_rows if r is lk_rows[-1]], key=lambda r: r["alpha_B_per_L2"])
+            ar = [r for r in ar if r["phase"] != "lk" or any(
+                q["phase"] == phase for q in rows)]
+            if len(ar) > 1:
+                lk = ar[-1]["lk_ring"]
+                a = [r["alpha_B_per_L2"] for r in ar]
+                ax[1].plot(a, [r["T1_B_per_L"] for r in ar], mk, ms=3,
+                           label=f"Lk_i = {lk:+.0f} ({phase})")
+                ax[2].plot(a, [r["eta_mean_rad"] for r in ar], mk, ms=3,
+                           label=f"Lk_i = {lk:+.0f} ({phase})")
+    ax[0].axvline(math.sqrt(3) / cr.DNA_TWIST_OVER_BEND, color="k", lw=0.6, ls=":",
+                  label="Michell: Tw = sqrt(3) B/C")
+    ax[0].set_xlabel("Lk_i")
+    ax[0].set_ylabel("turns")
+    ax[0].legend(fontsize=6)
     s = SLIDE32_READ_OFF
-    ax[0].add_patch(matplotlib.patches.Rectangle(
+    ax[1].add_patch(matplotlib.patches.Rectangle(
         (s["inset"]["alpha_B_per_L2"][0], s["inset"]["T1_B_per_L"][0]),
         s["inset"]["alpha_B_per_L2"][1] - s["inset"]["alpha_B_per_L2"][0],
         s["inset"]["T1_B_per_L"][1] - s["inset"]["T1_B_per_L"][0], fill=False, ls="--",
-        color="k", label="slide 32 inset range (read-off)"))
-    ax[0].axhspan(-12, 0, color="0.9", zorder=-1, label="slide 32 T1 axis range (read-off)")
-    ax[0].set_xlabel("alpha (B/L^2)")
-    ax[0].set_ylabel("T1 = 2 pi C (Lk_1 - Wr_1)/L (B/L)")
-    ax[0].legend(fontsize=7)
-    ax[1].axhline(0, color="k", lw=0.5)
+        color="k", label="slide 32 inset range (axis labels)"))
+    ax[1].axhspan(-12, 0, color="0.9", zorder=-1, label="slide 32 T1 axis (axis labels)")
     ax[1].set_xlabel("alpha (B/L^2)")
-    ax[1].set_ylabel("mean contact eta (rad)")
-    ax[1].legend(fontsize=7)
+    ax[1].set_ylabel("T1 = 2 pi C (Lk_1 - Wr_1)/L (B/L)")
+    ax[1].legend(fontsize=6)
+    ax[2].axhline(0, color="k", lw=0.5)
+    ax[2].set_xlabel("alpha (B/L^2)")
+    ax[2].set_ylabel("mean contact eta (rad)")
+    ax[2].legend(fontsize=6)
     fig.tight_layout()
     fig.savefig(path, dpi=120)
 
 
-def finish(branches: dict, wall_time_s: float, complete: bool) -> None:
+def finish(scans: dict, wall_time_s: float, complete: bool) -> None:
     res = {"model": {"diameter_over_length": 0.02, "twist_over_bend": cr.DNA_TWIST_OVER_BEND,
                      "contact": "bilateral", "spacing_over_diameter": 0.5,
                      "n": 1, "handedness": "left"},
-           "branches": branches, "complete": complete, "slide32_read_off": SLIDE32_READ_OFF}
-    res["buckling"] = {k: buckling(v) for k, v in branches.items()}
+           "lk_step": LK_STEP, "alpha_step_B_per_L2": ALPHA_STEP,
+           "scans": scans, "complete": complete, "slide32_read_off": SLIDE32_READ_OFF,
+           "michell_lk": math.sqrt(3) / cr.DNA_TWIST_OVER_BEND}
+    res["instabilities"] = {k: instabilities(v) for k, v in scans.items()}
     res["wall_time_s"] = wall_time_s
     (OUT / "chiral_rings.json").write_text(json.dumps(res, indent=1))
     (OUT / "chiral_rings.md").write_text(write_md(res))
@@ -191,41 +261,34 @@ def finish(branches: dict, wall_time_s: float, complete: bool) -> None:
 
 
 def assemble() -> int:
-    branches = {}
-    wall = 0.0
-    for lk in LADDER:
-        f = WORK / f"branch_{lk:+.0f}.jsonl"
+    scans, wall = {}, 0.0
+    for name, _, _ in SCANS:
+        f = _log(name)
         rows = [json.loads(t) for t in f.read_text().splitlines() if t.strip()] \
             if f.exists() else []
         if rows:
-            branches[f"{lk:+.0f}"] = rows
+            scans[name] = rows
             wall = max(wall, sum(r["wall_time_s"] for r in rows))
-    finish(branches, wall, complete=False)
+    finish(scans, wall, complete=False)
     return 0
 
 
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--quick", action="store_true", help="fewer alphas and iterations")
-    ap.add_argument("--workers", type=int, default=4)
+    ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--assemble", action="store_true",
-                    help="only write the results from the branch logs already written "
-                         "(chiral_rings.work/branch_*.jsonl), e.g. of an interrupted run")
+                    help="only write the results from the logs already written "
+                         "(chiral_rings.work/*.jsonl), e.g. of an interrupted run")
     a = ap.parse_args(argv)
     OUT.mkdir(exist_ok=True)
     if a.assemble:
         return assemble()
     t0 = time.perf_counter()
-    jobs = []
-    for lk in LADDER:
-        al = ALPHAS_LK_M1 if lk == -1 else ALPHAS
-        if a.quick:
-            al = al[::2]
-        jobs.append((lk, al, a.quick))
     with mp.get_context("fork").Pool(a.workers) as pool:
-        out = pool.map(branch, jobs, chunksize=1)
-    finish({f"{lk:+.0f}": rows for lk, rows in zip(LADDER, out)},
-           time.perf_counter() - t0, complete=True)
+        pool.map(scan, SCANS, chunksize=1)
+    scans = {name: [json.loads(t) for t in _log(name).read_text().splitlines() if t.strip()]
+             for name, _, _ in SCANS}
+    finish(scans, time.perf_counter() - t0, complete=True)
     return 0
 
 

@@ -198,6 +198,9 @@ class Problem:
     b: float
     delta: float
     k_contact: float
+    #: per bead, its partner bead on the other ring (global index), tracked by continuity
+    #: (:func:`update_partners`); None until assigned
+    partner: np.ndarray | None = None
 
     @property
     def n_beads(self) -> int:
@@ -205,6 +208,22 @@ class Problem:
 
     def ring(self, k) -> slice:
         return self.cbp.chains.ring(k)
+
+    def along(self, idx, offset):
+        """Global index of the bead ``offset`` beads along its ring from bead ``idx``."""
+        idx = np.asarray(idx, int)
+        start = np.where(self.ring_of[idx] == 0, self.ring(0).start, self.ring(1).start)
+        size = np.where(self.ring_of[idx] == 0, self.ring(0).stop - self.ring(0).start,
+                        self.ring(1).stop - self.ring(1).start)
+        return start + (idx - start + np.asarray(offset, int)) % size
+
+    def ring_distance(self, a, b):
+        """Number of beads between beads ``a`` and ``b`` of one ring, the short way round."""
+        a, b = np.asarray(a, int), np.asarray(b, int)
+        size = np.where(self.ring_of[a] == 0, self.ring(0).stop - self.ring(0).start,
+                        self.ring(1).stop - self.ring(1).start)
+        d = (a - b) % size
+        return np.minimum(d, size - d)
 
 
 def make_problem(model: ChiralRings) -> Problem:
@@ -338,7 +357,21 @@ def chiral_pairs(x, prob: Problem, margin: float = 0.0) -> np.ndarray:
     lists = t0.query_ball_tree(t1, chiral_cutoff(prob) + margin)
     i = np.repeat(np.arange(len(lists)), [len(q) for q in lists])
     j = np.concatenate([np.asarray(q, int) for q in lists]) if len(i) else np.zeros(0, int)
-    return np.column_stack([i + s0.start, j + s1.start]).astype(int).reshape(-1, 2)
+    pairs = np.column_stack([i + s0.start, j + s1.start]).astype(int).reshape(-1, 2)
+    if prob.partner is not None and len(pairs):
+        # the seed's term acts along the contact curve: keep pairs near each other's partner
+        w = chiral_window(prob)
+        i, j = pairs[:, 0], pairs[:, 1]
+        keep = ((prob.ring_distance(j, prob.partner[i]) <= w)
+                | (prob.ring_distance(i, prob.partner[j]) <= w))
+        pairs = pairs[keep]
+    return pairs
+
+
+def chiral_window(prob: Problem) -> int:
+    """Half-width (beads) about a bead's partner within which pairs carry the chiral term
+    once partners are tracked: the cutoff in beads plus two."""
+    return int(math.ceil(chiral_cutoff(prob) / prob.b)) + 2
 
 
 def _chiral_directed(x, T, nv, i, j, prob: Problem, alpha: float, want_grad: bool):
@@ -356,11 +389,15 @@ def _chiral_directed(x, T, nv, i, j, prob: Problem, alpha: float, want_grad: boo
     y = Y / rho
     xx = np.sum(Ti * Tj, axis=1)
     s = np.sqrt(xx * xx + y * y)
-    sx = s + xx
-    if np.any(sx < 1e-6 * np.maximum(s, 1e-300)):
-        raise ChiralRingsError("chiral term: two strands in contact are antiparallel "
-                               "(eta = pi, where tan(eta/2) diverges)")
-    tau = y / sx * xx            # tan(eta/2) x the projected length factor t_i.t_j
+    if np.any(s < 1e-12):
+        raise ChiralRingsError("chiral term: a pair's tangents are both along the chord "
+                               "(no braid angle is defined)")
+    ax = np.abs(xx)
+    sx = s + ax
+    # tan(eta/2) x the projected length factor x = t_i.t_j, eta = atan2(y, x), folded for
+    # apolar DNA (docs/chirality.md, Eq. C3): x y / (s + |x|) equals x tan(eta/2) for
+    # |eta| < pi/2, is even under t_j -> -t_j, bounded (|tau| < 0.31 s) and C1 through x = 0
+    tau = y / sx * xx
     W, dW = contact_weight(rho, D, m.decay_over_diameter * D)
     H, dH = axial_kernel(zeta, a)
     c = 0.5 * alpha * prob.b * prob.b
@@ -368,8 +405,8 @@ def _chiral_directed(x, T, nv, i, j, prob: Problem, alpha: float, want_grad: boo
     if not want_grad:
         return E, None
     f_tau = c * W * H
-    dtau_dy = xx * xx / (s * sx)
-    dtau_dx = -y * xx / (s * sx) + y / sx
+    dtau_dy = xx * ax / (s * sx)
+    dtau_dx = y / sx - y * ax / (s * sx)
     g_rho = c * dW * H * tau + f_tau * dtau_dy * (-Y / (rho * rho))
     g_Y = f_tau * dtau_dy / rho
     g_x = f_tau * dtau_dx
@@ -411,11 +448,24 @@ def chiral_energy_gradient(x, prob: Problem, pairs=None, *, alpha=None, want_gra
 
 # -- bilateral contact -------------------------------------------------------------------------
 
+#: Half-width (beads) of the window about a bead's partner on the other ring in which the
+#: bilateral contact looks for the closest point, once partners are tracked
+#: (:func:`update_partners`). A writhed pair touches itself: near a bead lie two stretches of
+#: the other ring (its partner, and the far side of the ply), both at about Delta; a global
+#: search would jump between them.
+PARTNER_WINDOW = 4
+
+
 def bilateral_candidates(x, prob: Problem, k_max: int = 24) -> np.ndarray:
     """For every bead, up to ``k_max`` segment starts of the other ring near it ((N, k), -1 pad).
 
-    The segments ``(s, nxt[s])`` whose start or end bead lies within ``1.5 Delta + 2 b``.
+    With partners tracked (``prob.partner``): the ``2 PARTNER_WINDOW + 1`` segments about the
+    partner. Otherwise the segments ``(s, nxt[s])`` whose start or end bead lies within
+    ``1.5 Delta + 2 b``.
     """
+    if prob.partner is not None:
+        off = np.arange(-PARTNER_WINDOW, PARTNER_WINDOW + 1)
+        return prob.along(prob.partner[:, None], off[None, :])
     N = prob.n_beads
     out = np.full((N, k_max), -1, int)
     used = 1
@@ -488,6 +538,17 @@ def closest_on_other_ring(x, prob: Problem, cand, newton_steps: int = 5):
     tq = np.einsum("nj,njc->nc", dB[rr, m], P[rr, m])
     tq /= np.linalg.norm(tq, axis=1)[:, None]
     return seg, u[rr, m], q[rr, m], d[rr, m], tq
+
+
+def update_partners(x, prob: Problem) -> np.ndarray:
+    """Set ``prob.partner`` to each bead's closest bead of the other ring: found globally
+    the first time, within :data:`PARTNER_WINDOW` of the previous partner afterwards."""
+    seg, u, _, _, _ = closest_on_other_ring(x, prob, bilateral_candidates(x, prob))
+    if np.any(seg < 0):
+        raise ChiralRingsError(f"partners: {int(np.sum(seg < 0))} beads have no point of the "
+                               "other ring within 1.5 Delta (contact lost)")
+    prob.partner = np.where(u < 0.5, seg, prob.nxt[seg]).astype(int)
+    return prob.partner
 
 
 def bilateral_energy_gradient(x, prob: Problem, cand=None, want_grad=True):
@@ -709,10 +770,17 @@ def relax(model: ChiralRings, x0, *, gtol: float | None = None, max_iter: int = 
     gtol = 1e-6 * f_scale if gtol is None else float(gtol)
     pinned = cb.pinned_dofs(x)
     free = np.setdiff1d(np.arange(3 * N), pinned)
+    # trust radius on the largest bead displacement: grows while clipped steps descend
+    # (a buckled ring travels many Delta to its writhed branch), shrinks when they do not
     max_step = 0.25 * prob.delta
-    slide_stiffness = 100.0        # B/L^3, of the order of the rings' soft bending modes
+    step_range = (1e-3 * prob.delta, MAX_STEP_OVER_DIAMETER * prob.delta)
+    slide_stiffness = SLIDE_STIFFNESS
     mu = 1e-3
+    track = prob.model.contact == "bilateral"
+    if track:
+        update_partners(x, prob)
     E = energy(x, prob)
+    topo = _topology(x, prob)
     it = 0
     stalls = 0
     converged = False
@@ -728,13 +796,17 @@ def relax(model: ChiralRings, x0, *, gtol: float | None = None, max_iter: int = 
             break
         H = hessian(x, prob, lists)
         # each ring's bead-lattice sliding (all beads along their tangents) is a near-zero
-        # mode: stiffen it in the step (not in the energy) so that steps do not wander
+        # mode of a smooth ring: stiffen it in the step (not in the energy) so that steps do
+        # not wander. Not where the sliding has a curvature of its own (a writhed,
+        # self-touching ring: the added stiffness would then keep the sliding force from
+        # relaxing, and Newton would converge linearly)
         T, _ = bead_tangents(x, prob)
         for kk in range(2):
             v = np.zeros((N, 3))
             v[prob.ring(kk)] = T[prob.ring(kk)]
             v = v.ravel() / math.sqrt(prob.ring(kk).stop - prob.ring(kk).start)
-            H += slide_stiffness * np.outer(v, v)
+            if float(v @ H @ v) < SLIDE_CURVATURE:
+                H += slide_stiffness * np.outer(v, v)
         H = H[np.ix_(free, free)]
         gf = g[free]
         accepted = False
@@ -746,21 +818,36 @@ def relax(model: ChiralRings, x0, *, gtol: float | None = None, max_iter: int = 
                 continue
             p = -sla.cho_solve(cf, gf, check_finite=False)
             pm = np.max(np.abs(p))
-            if pm > max_step:
+            clipped = pm > max_step
+            if clipped:
                 p *= max_step / pm
             xn = x.copy().ravel()
             xn[free] += p
             xn = xn.reshape(N, 3)
             try:
                 En = energy(xn, prob)
+                # a step must not pass a strand through another (the contact penalties are
+                # finite): the link and each ring's writhe change continuously otherwise
+                tn = _topology(xn, prob)
+                if np.max(np.abs(tn - topo)) > 0.5:
+                    En = np.inf
             except ChiralRingsError:
                 En = np.inf
             if np.isfinite(En) and En < E:
-                x, E = xn, En
+                x, E, topo = xn, En, tn
                 mu = max(mu / 3, 1e-10)
                 accepted = True
+                if clipped:
+                    max_step = min(2 * max_step, step_range[1])
+                if track:
+                    update_partners(x, prob)
+                    E = energy(x, prob)
                 break
             mu *= 10
+            max_step = max(0.5 * max_step, step_range[0])
+        if _DEBUG:
+            print(f"it {it} g {gmax:.3g} E {E:.10g} mu {mu:.2g} step {max_step/prob.delta:.3g} "
+                  f"acc {accepted}", flush=True)
         if not accepted:
             stalls += 1
             mu = 1e-3
@@ -774,6 +861,23 @@ def relax(model: ChiralRings, x0, *, gtol: float | None = None, max_iter: int = 
     return {"x": x, "energy_B_per_L": E, "iterations": it, "max_gradient_B_per_L2": gmax,
             "converged": bool(converged), "gtol_B_per_L2": gtol,
             "wall_time_s": time.perf_counter() - t0}
+
+
+_DEBUG = False
+
+#: Stiffness (B/L^3) added along a ring's sliding mode in :func:`relax`'s step when the
+#: energy's own curvature along it is below :data:`SLIDE_CURVATURE` (B/L^3).
+SLIDE_STIFFNESS = 100.0
+SLIDE_CURVATURE = 1.0
+
+#: Largest trust radius of :func:`relax` (x Delta).
+MAX_STEP_OVER_DIAMETER = 4.0
+
+
+def _topology(x, prob: Problem) -> np.ndarray:
+    """(Lk_12, Wr_1, Wr_2): a strand passage changes Lk_12 or a writhe by 2."""
+    return np.array([gauss_linking_number(x[prob.ring(0)], x[prob.ring(1)]),
+                     *ring_writhes(x, prob)])
 
 
 def lowest_modes(x, prob: Problem, k: int = 3, H=None):
@@ -848,13 +952,20 @@ def measure(x, prob: Problem) -> dict:
 
 
 def solve(model: ChiralRings, x0=None, *, progress=None, stability: bool = True,
-          max_iter: int = 200, max_escapes: int = 3, escape_over_diameter: float = 0.5
-          ) -> dict:
+          max_iter: int = 200, max_escapes: int = 3, escape_over_diameter: float = 0.5,
+          partner=None) -> dict:
     """Relax from ``x0`` (default :func:`initial_geometry`), measure, and (``stability``)
     the lowest projected Hessian eigenvalues (B/L^3); a saddle is escaped along its negative
     mode (largest bead displacement ``escape_over_diameter`` x Delta, both signs tried, the
-    lower energy kept), at most ``max_escapes`` times."""
+    lower energy kept), at most ``max_escapes`` times. ``partner``: the contact partners of
+    ``x0`` (a previous result's ``"partner"``; default: found globally at ``x0``), carried
+    along a continuation so that a self-touching pair keeps its own contact."""
     prob = make_problem(model)
+    if partner is not None:
+        partner = np.asarray(partner, int)
+        if partner.shape != (prob.n_beads,):
+            raise UserError(f"partner has shape {partner.shape}, expected ({prob.n_beads},)")
+        prob.partner = partner.copy()
     x0 = initial_geometry(model) if x0 is None else np.asarray(x0, float)
     res = relax(model, x0, progress=progress, prob=prob, max_iter=max_iter)
     escapes = 0
@@ -868,15 +979,72 @@ def solve(model: ChiralRings, x0=None, *, progress=None, stability: bool = True,
             mode = v[:, 0].reshape(-1, 3)
             mode = mode * (escape_over_diameter * prob.delta / np.max(np.abs(mode)))
             best = None
+            start_partner = None if prob.partner is None else prob.partner.copy()
             for sgn in (1.0, -1.0):
+                prob.partner = None if start_partner is None else start_partner.copy()
                 r = relax(model, res["x"] + sgn * mode, prob=prob, max_iter=max_iter,
                           progress=progress)
+                r["partner"] = None if prob.partner is None else prob.partner.copy()
                 if best is None or r["energy_B_per_L"] < best["energy_B_per_L"]:
                     best = r
             res = best
+            prob.partner = res["partner"]
             w, v = lowest_modes(res["x"], prob)
-    out = {**res, **measure(res["x"], prob), "saddle_escapes": escapes}
+    out = {**res, **measure(res["x"], prob), "saddle_escapes": escapes,
+           "partner": None if prob.partner is None else prob.partner.copy()}
     if stability:
         out["lowest_eigenvalues_B_per_L3"] = [float(t) for t in w]
         out["lowest_mode"] = v[:, 0]
     return out
+
+
+# -- continuation ------------------------------------------------------------------------------
+
+#: A step whose ring writhe changes by more than this (turns) has left the branch it came
+#: from (a buckling jump or a fold); the continuation halves the step to locate it.
+WRITHE_JUMP = 0.25
+
+
+def continuation(model: ChiralRings, start: dict, parameter: str, target: float,
+                 step: float, *, min_step: float | None = None, max_iter: int = 60,
+                 stability: bool = True):
+    """Natural-parameter continuation of ``model``'s ``parameter`` (``"lk_ring"`` or
+    ``"alpha_B_per_L2"``) from a solved state ``start`` (a :func:`solve` result at ``model``)
+    to ``target``, yielding each accepted :func:`solve` result with ``"parameter_value"``.
+
+    Each step restarts Newton from the last accepted state and its contact partners. A
+    step that does not converge is halved (down to ``min_step``, default ``|step|/4``); at
+    the smallest step the result is accepted as it is, ``"converged"`` saying so. A step
+    whose ring writhe changes by more than :data:`WRITHE_JUMP` (``"jump"``) has left its
+    branch: the state it came from turned unstable (:func:`solve` escapes the saddle) and the
+    solver fell onto another branch. Such a jump is kept, not refined: the instability point
+    is bracketed by the two rows and located by the lowest eigenvalue's zero on the branch
+    before it. No arc length: folds are crossed by jumps, not followed.
+    """
+    if parameter not in ("lk_ring", "alpha_B_per_L2"):
+        raise UserError(f"parameter={parameter!r}: must be 'lk_ring' or 'alpha_B_per_L2'")
+    if step == 0 or not math.isfinite(step):
+        raise UserError(f"step={step!r}: must be a finite number != 0")
+    value = float(getattr(model, parameter))
+    direction = math.copysign(1.0, target - value)
+    h = abs(step)
+    h_min = h / 4 if min_step is None else abs(min_step)
+    cur = start
+    while direction * (target - value) > 1e-12:
+        nxt = value + direction * min(h, abs(target - value))
+        m = dataclasses.replace(model, **{parameter: nxt})
+        r = solve(m, cur["x"], partner=cur.get("partner"), stability=stability,
+                  max_iter=max_iter)
+        jump = abs(r["writhe_per_ring"][0] - cur["writhe_per_ring"][0])
+        if not r["converged"] and h > h_min * (1 + 1e-9):
+            h = max(h / 2, h_min)
+            continue
+        r["parameter"] = parameter
+        r["parameter_value"] = nxt
+        r["jump"] = float(jump)
+        r["branch_left"] = bool(jump > WRITHE_JUMP or r.get("saddle_escapes", 0) > 0)
+        r["step"] = float(h)
+        yield r
+        cur, value = r, nxt
+        if r["converged"] and h < abs(step):
+            h = min(2 * h, abs(step))
