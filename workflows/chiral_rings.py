@@ -5,10 +5,10 @@ start of slide 14), Delta/L = 0.02, C/B = 1.5, bilateral contact, chiral term
 phi = alpha tan(eta/2) along the contact (dnabraid.statics.chiral_rings). Natural-parameter
 continuation (``chiral_rings.continuation``):
 
-* the Lk scan: at alpha = 0, each ring's Lk_i from 0 to +5 and to -1 in steps of 1/4
+* the Lk scans: at alpha = 0, each ring's Lk_i from 0 to +5, -5, -1, +1 in steps of 1/4
   (halved where Newton does not converge); the circles buckle at Michell's threshold and
   the pair jumps to a writhed, self-touching branch;
-* the alpha scans: from the alpha = 0 state at Lk_i = 5 (the slide's case), -1 and +1,
+* the alpha scans: from the alpha = 0 state at Lk_i = +-5 (the slide's case), -1 and +1,
   alpha up to 3500 B/L^2 and down to -1000 (slide 32's axis) in steps of 250.
 
 Each row: T1 = 2 pi C (Lk_1 - Wr_1)/L (ring 1's twisting moment, B/L), the writhes, the
@@ -17,7 +17,8 @@ projected out), whether the branch was left (a jump). The scans run in parallel 
 and write their rows as they go (``chiral_rings.work/*.jsonl``); ``--assemble`` writes the
 results from those logs.
 
-Writes workflows/results/chiral_rings.json, chiral_rings.md, chiral_rings.png.
+Writes workflows/results/chiral_rings.json, chiral_rings.md, chiral_rings.png,
+chiral_rings_shapes.png.
 Run: OMP_NUM_THREADS=1 python workflows/chiral_rings.py [--workers 2]
 """
 
@@ -41,8 +42,8 @@ LK_STEP = 0.25
 ALPHA_STEP = 250.0
 ALPHA_MAX, ALPHA_MIN = 3500.0, -1000.0
 #: (name, Lk_i targets of the alpha = 0 scan, the Lk_i whose alpha scans follow)
-SCANS = (("lk_up", (3.0, 5.0), (5.0,)), ("lk_down", (-1.0,), (-1.0,)),
-         ("lk_one", (1.0,), (1.0,)))
+SCANS = (("lk_up", (3.0, 5.0), (5.0,)), ("lk_minus5", (-5.0,), (-5.0,)),
+         ("lk_down", (-1.0,), (-1.0,)), ("lk_one", (1.0,), (1.0,)))
 
 #: Slide 32 as far as the seed's text extraction carries it: tick labels and branch letters,
 #: no curve data. Main axes alpha -1000 ... 3500 B/L^2, T1 0 ... -12; inset alpha
@@ -147,7 +148,12 @@ def instabilities(rows) -> list:
             l0 = rows[k - 2]["lowest_eigenvalues_B_per_L3"][0]
             l1 = a["lowest_eigenvalues_B_per_L3"][0]
             if l0 != l1 and p1 != p0:
-                rec["lam_zero_extrapolated"] = float(p1 - l1 * (p1 - p0) / (l1 - l0))
+                z = float(p1 - l1 * (p1 - p0) / (l1 - l0))
+                lo, hi = sorted((p0, b[par]))
+                # a zero inside the bracket: the branch lost stability there; elsewhere
+                # lam_min did not head for zero (the jump is a fold or a new self-contact
+                # that the lowest eigenvalue of the state before does not announce)
+                rec["lam_zero_extrapolated"] = z if lo <= z <= hi else None
         out.append(rec)
     return out
 
@@ -244,6 +250,46 @@ def plot(res, path):
     fig.savefig(path, dpi=120)
 
 
+def plot_shapes(path) -> list:
+    """Top and side views of the saved states at alpha = 0 and at the scans' ends."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    names = []
+    for lk in (3, 5, -5):
+        for a in (ALPHA_MIN, 0.0, ALPHA_MAX):
+            f = WORK / f"x_lk{lk:+.0f}_a{a:.0f}.npy"
+            if f.exists():
+                names.append((lk, a, f))
+    if not names:
+        return []
+    fig, ax = plt.subplots(len(names), 2, figsize=(11, 1.9 * len(names)), squeeze=False)
+    ax = ax.T
+    for c, (lk, a, f) in enumerate(names):
+        x = np.load(f)
+        x = x - x.mean(axis=0)
+        # principal axes: view along the smallest (top) and the middle one (side)
+        _, _, vt = np.linalg.svd(x, full_matrices=False)
+        y = x @ vt.T
+        half = len(x) // 2
+        for r, (i, j) in enumerate(((0, 1), (0, 2))):
+            for k, col in ((0, "C0"), (1, "C3")):
+                seg = y[k * half:(k + 1) * half]
+                seg = np.vstack([seg, seg[:1]])
+                ax[r, c].plot(seg[:, i], seg[:, j], "-", color=col, lw=1.2)
+            ax[r, c].set_aspect("equal")
+            ax[r, c].set_xticks([])
+            ax[r, c].set_yticks([])
+        ax[0, c].set_ylabel(f"Lk_i = {lk:+d}\nalpha = {a:.0f}", fontsize=8)
+    ax[0, 0].set_title("top (principal axes 1-2); ring 1 blue, ring 2 red", fontsize=8)
+    ax[1, 0].set_title("side (principal axes 1-3)", fontsize=8)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    return [f"Lk {lk:+d}, alpha {a:.0f}" for lk, a, _ in names]
+
+
 def finish(scans: dict, wall_time_s: float, complete: bool) -> None:
     res = {"model": {"diameter_over_length": 0.02, "twist_over_bend": cr.DNA_TWIST_OVER_BEND,
                      "contact": "bilateral", "spacing_over_diameter": 0.5,
@@ -256,6 +302,7 @@ def finish(scans: dict, wall_time_s: float, complete: bool) -> None:
     (OUT / "chiral_rings.json").write_text(json.dumps(res, indent=1))
     (OUT / "chiral_rings.md").write_text(write_md(res))
     plot(res, OUT / "chiral_rings.png")
+    plot_shapes(OUT / "chiral_rings_shapes.png")
     print(f"wrote {OUT / 'chiral_rings.json'} ({'complete' if complete else 'partial'})",
           flush=True)
 

@@ -41,18 +41,29 @@ Energy (:func:`energy_terms`)
   tan(eta_ij / 2)``, symmetrised over which bead's tangent is the axis (half each), where
   for bead tangents ``t_i, t_j`` and chord ``r = x_j - x_i``: ``zeta = r.t_i`` (the offset
   along the strand; the factor ``t_i.t_j`` below turns bead j's length ``b`` into its
-  projection on ``t_i``, so that the sum over ``j`` integrates ``d zeta``), ``rho = |r - zeta t_i|`` (the distance across it), ``eta_ij =
+  projection on ``t_i``, so that the sum over ``j`` integrates ``d zeta``),
+  ``rho = |r - zeta t_i|`` (the distance across it), ``eta_ij =
   atan2((t_i x t_j).r/rho, t_i.t_j)`` (docs/chirality.md's braid angle; positive
   left-handed), ``h`` a normalised Gaussian (standard deviation ``a/4``) tapered to zero at
-  ``|zeta| = a`` (:func:`axial_kernel`) (``sum_j b h -> 1``: the double sum is an integral per unit contact length) and the
-  contact weight ``w(rho) = 1`` for ``rho <= Delta``, ``1 - S((rho - Delta)/delta)`` for
+  ``|zeta| = a`` (:func:`axial_kernel`) (``sum_j b h -> 1``: the double sum is an integral
+  per unit contact length) and the contact weight ``w(rho) = 1`` for ``rho <= Delta``,
+  ``1 - S((rho - Delta)/delta)`` for
   ``Delta < rho < Delta + delta`` (``S`` the C^2 smootherstep ``6u^5 - 15u^4 + 10u^3``), 0
   beyond. ``tan(eta/2) = y / (sqrt(x^2 + y^2) + x)`` with ``x = t_i.t_j``, ``y = (t_i x
-  t_j).r/rho``.
+  t_j).r/rho``. The product ``x tan(eta/2)`` is folded for apolar DNA
+  (docs/chirality.md, Eq. C3) as ``x y / (sqrt(x^2 + y^2) + |x|)``: the same for
+  ``|eta| < pi/2`` (the seed's contact), even under ``t_j -> -t_j`` and bounded where two
+  strands meet antiparallel (a writhed pair touching itself). Once contact partners are
+  tracked (:func:`update_partners`) only pairs within :func:`chiral_window` beads of each
+  other's partner count: the seed's term acts along the contact curve, and the far side of
+  a self-touching ply carries only the hard contact.
 
 Relaxation (:func:`relax`)
 --------------------------
-A Levenberg-damped Newton method on the dense Hessian (the twist couples every bead of a
+A Levenberg-damped Newton method with a trust radius on the largest bead displacement
+(doubled while clipped steps descend, halved when they do not; a step that changes Lk_12 or
+a writhe by more than 1/2, i.e. passes a strand through another, is refused) on the dense
+Hessian (the twist couples every bead of a
 ring through ``Wr_i``): the stretch/bend/hard-contact parts are the exact sparse Hessians of
 :mod:`~dnabraid.statics.closed_braid` and :mod:`~dnabraid.forces.segment_contact`; the
 chiral, bilateral and local writhe parts by central differences of their analytic gradients
@@ -61,7 +72,10 @@ rank-one part ``(4 pi^2 C / L) grad Wr grad Wr^T`` exactly. Six coordinates pin 
 modes (:func:`~dnabraid.statics.closed_braid.pinned_dofs`). Stability (:func:`lowest_modes`):
 the lowest eigenvalues of the exact Hessian with the six rigid modes and each ring's
 bead-lattice sliding mode (all beads of a ring moved along their tangents: a zero mode of
-the continuum) projected out.
+the continuum) projected out. The bilateral contact holds each bead to its partner: the
+closest point of the other ring, searched within :data:`PARTNER_WINDOW` beads of the
+previous partner after every accepted step (globally only at the start), so that a pair
+touching itself keeps its own contact. :func:`continuation` steps ``Lk_i`` or ``alpha``.
 """
 
 from __future__ import annotations
@@ -845,9 +859,6 @@ def relax(model: ChiralRings, x0, *, gtol: float | None = None, max_iter: int = 
                 break
             mu *= 10
             max_step = max(0.5 * max_step, step_range[0])
-        if _DEBUG:
-            print(f"it {it} g {gmax:.3g} E {E:.10g} mu {mu:.2g} step {max_step/prob.delta:.3g} "
-                  f"acc {accepted}", flush=True)
         if not accepted:
             stalls += 1
             mu = 1e-3
@@ -862,8 +873,6 @@ def relax(model: ChiralRings, x0, *, gtol: float | None = None, max_iter: int = 
             "converged": bool(converged), "gtol_B_per_L2": gtol,
             "wall_time_s": time.perf_counter() - t0}
 
-
-_DEBUG = False
 
 #: Stiffness (B/L^3) added along a ring's sliding mode in :func:`relax`'s step when the
 #: energy's own curvature along it is below :data:`SLIDE_CURVATURE` (B/L^3).
