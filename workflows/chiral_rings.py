@@ -308,16 +308,35 @@ def finish(scans: dict, wall_time_s: float, complete: bool) -> None:
 
 
 def assemble() -> int:
+    """Results from every log in chiral_rings.work (the scans of :data:`SCANS` and any
+    scan continued separately by :func:`continue_scan`)."""
     scans, wall = {}, 0.0
-    for name, _, _ in SCANS:
-        f = _log(name)
-        rows = [json.loads(t) for t in f.read_text().splitlines() if t.strip()] \
-            if f.exists() else []
+    for f in sorted(WORK.glob("*.jsonl")):
+        rows = [json.loads(t) for t in f.read_text().splitlines() if t.strip()]
         if rows:
-            scans[name] = rows
+            scans[f.stem] = rows
             wall = max(wall, sum(r["wall_time_s"] for r in rows))
     finish(scans, wall, complete=False)
     return 0
+
+
+def continue_scan(name: str, lk: float, alpha_from: float, alpha_to: float) -> None:
+    """An alpha scan at ``lk`` from a saved state (``x_lk{lk}_a{alpha_from}.npy``, with the
+    partners saved at alpha = 0), logged as ``name``: a second process on a branch."""
+    x = np.load(WORK / f"x_lk{lk:+.0f}_a{alpha_from:.0f}.npy")
+    partner = np.load(WORK / f"partner_lk{lk:+.0f}_a0.npy")
+    m0 = cr.ChiralRings(lk_ring=lk, alpha_B_per_L2=alpha_from)
+    start = cr.solve(m0, x, partner=partner, max_iter=300)
+    log = _log(name)
+    log.write_text("")
+    phase = "alpha_up" if alpha_to > alpha_from else "alpha_down"
+    for q in cr.continuation(m0, start, "alpha_B_per_L2", alpha_to, ALPHA_STEP, max_iter=300):
+        q["lk"], q["alpha"] = lk, q["parameter_value"]
+        with log.open("a") as fh:
+            fh.write(json.dumps(row(phase, q)) + "\n")
+        np.save(WORK / f"x_lk{lk:+.0f}_a{q['parameter_value']:.0f}.npy", q["x"])
+        print(f"[{name}] alpha {q['parameter_value']:.0f}: T1 "
+              f"{q['torque_per_ring_B_per_L'][0]:+.3f}, conv {q['converged']}", flush=True)
 
 
 def main(argv=None):
