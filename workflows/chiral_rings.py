@@ -160,16 +160,19 @@ def instabilities(rows) -> list:
 
 def _fmt_row(r, par):
     lam = r["lowest_eigenvalues_B_per_L3"]
+    # the Hessian's lowest eigenvalue is a stability statement only at an equilibrium
+    lam_s = f"{lam[0]:.3g}" if (lam and r["converged"]) else "-"
+    note = ", ".join(([] if r["converged"] else ["NOT CONVERGED"])
+                     + (["branch left"] if r["branch_left"] else []))
     return (f"| {r[par]:+.3f} | {r['T1_B_per_L']:+.3f} | {r['twist_per_ring'][0]:+.3f} | "
             f"{r['writhe_per_ring'][0]:+.3f} | {r['eta_mean_rad']:+.4f} | "
-            f"{r['eta_min_rad']:+.3f} / {r['eta_max_rad']:+.3f} | {lam[0]:.3g} | "
-            f"{r['energy_B_per_L']:.2f} | {r['max_gradient_B_per_L2']:.1e} | "
-            f"{'yes' if r['branch_left'] else ''} |")
+            f"{r['eta_min_rad']:+.3f} / {r['eta_max_rad']:+.3f} | {lam_s} | "
+            f"{r['energy_B_per_L']:.2f} | {r['max_gradient_B_per_L2']:.1e} | {note} |")
 
 
 def write_md(res) -> str:
     head = ("| {p} | T1 (B/L) | Tw_1 | Wr_1 | eta mean (rad) | eta min / max | lam_min (B/L^3) "
-            "| E (B/L) | max grad (B/L^2) | branch left |")
+            "| E (B/L) | max grad (B/L^2) | note |")
     sep = "|---|---|---|---|---|---|---|---|---|---|"
     L = ["# The seed's chiral linked rings at T = 0 (`workflows/chiral_rings.py`)", "",
          "Two rings of length L, Hopf link (Lk_12 = -1, left-handed), Delta/L = 0.02, "
@@ -208,13 +211,15 @@ def plot(res, path):
     import matplotlib.pyplot as plt
 
     fig, ax = plt.subplots(1, 3, figsize=(15, 4.4))
+    labelled = False
     for name, rows in res["scans"].items():
         lk_rows = [r for r in rows if r["phase"] == "lk"]
-        ax[0].plot([r["lk_ring"] for r in lk_rows], [r["writhe_per_ring"][0] for r in lk_rows],
-                   "o-", ms=3, label=f"Wr_1 ({name})")
-        ax[0].plot([r["lk_ring"] for r in lk_rows], [r["T1_B_per_L"] / (2 * math.pi)
-                                                     for r in lk_rows],
-                   "s--", ms=3, label=f"T1/(2 pi) ({name})")
+        if len(lk_rows) > 2:
+            ax[0].plot([r["lk_ring"] for r in lk_rows], [r["writhe_per_ring"][0] for r in lk_rows],
+                       "o-", ms=3, label=f"Wr_1 ({name})")
+            ax[0].plot([r["lk_ring"] for r in lk_rows],
+                       [r["T1_B_per_L"] / (2 * math.pi) for r in lk_rows],
+                       "s--", ms=3, label=f"T1/(2 pi) ({name})")
         for phase, mk in (("alpha_up", "o-"), ("alpha_down", "o-")):
             ar = sorted([r for r in rows if r["phase"] == phase] + [
                 r for r in lk_rows if r is lk_rows[-1]], key=lambda r: r["alpha_B_per_L2"])
@@ -223,12 +228,19 @@ def plot(res, path):
             if len(ar) > 1:
                 lk = ar[-1]["lk_ring"]
                 a = [r["alpha_B_per_L2"] for r in ar]
-                ax[1].plot(a, [r["T1_B_per_L"] for r in ar], mk, ms=3,
+                ln, = ax[1].plot(a, [r["T1_B_per_L"] for r in ar], mk, ms=3,
+                                 label=f"Lk_i = {lk:+.0f} ({phase})")
+                ax[2].plot(a, [r["eta_mean_rad"] for r in ar], mk, ms=3, color=ln.get_color(),
                            label=f"Lk_i = {lk:+.0f} ({phase})")
-                ax[2].plot(a, [r["eta_mean_rad"] for r in ar], mk, ms=3,
-                           label=f"Lk_i = {lk:+.0f} ({phase})")
-    ax[0].axvline(math.sqrt(3) / cr.DNA_TWIST_OVER_BEND, color="k", lw=0.6, ls=":",
-                  label="Michell: Tw = sqrt(3) B/C")
+                bad = [r for r in ar if not r["converged"]]
+                for k, key in ((1, "T1_B_per_L"), (2, "eta_mean_rad")):
+                    ax[k].plot([r["alpha_B_per_L2"] for r in bad], [r[key] for r in bad], "x",
+                               ms=5, color="k", label=None if (labelled or not bad) else
+                               "not converged")
+                labelled = labelled or bool(bad)
+    for sgn in (1, -1):
+        ax[0].axvline(sgn * math.sqrt(3) / cr.DNA_TWIST_OVER_BEND, color="k", lw=0.6, ls=":",
+                      label="Michell: |Tw| = sqrt(3) B/C" if sgn > 0 else None)
     ax[0].set_xlabel("Lk_i")
     ax[0].set_ylabel("turns")
     ax[0].legend(fontsize=6)
@@ -320,7 +332,8 @@ def assemble() -> int:
     return 0
 
 
-def continue_scan(name: str, lk: float, alpha_from: float, alpha_to: float) -> None:
+def continue_scan(name: str, lk: float, alpha_from: float, alpha_to: float,
+                  step: float = ALPHA_STEP) -> None:
     """An alpha scan at ``lk`` from a saved state (``x_lk{lk}_a{alpha_from}.npy``, with the
     partners saved at alpha = 0), logged as ``name``: a second process on a branch."""
     x = np.load(WORK / f"x_lk{lk:+.0f}_a{alpha_from:.0f}.npy")
@@ -330,7 +343,7 @@ def continue_scan(name: str, lk: float, alpha_from: float, alpha_to: float) -> N
     log = _log(name)
     log.write_text("")
     phase = "alpha_up" if alpha_to > alpha_from else "alpha_down"
-    for q in cr.continuation(m0, start, "alpha_B_per_L2", alpha_to, ALPHA_STEP, max_iter=300):
+    for q in cr.continuation(m0, start, "alpha_B_per_L2", alpha_to, step, max_iter=300):
         q["lk"], q["alpha"] = lk, q["parameter_value"]
         with log.open("a") as fh:
             fh.write(json.dumps(row(phase, q)) + "\n")
