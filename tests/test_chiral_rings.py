@@ -212,11 +212,26 @@ def test_chiral_energy_is_apolar():
     assert Er == pytest.approx(E, rel=1e-12)
 
 
+def test_antiparallel_chiral_gradient_matches_finite_differences():
+    """The fold's |x| branch (antiparallel tangents, ring 2 reversed) against central
+    differences of the folded energy."""
+    model = cr.ChiralRings(lk_ring=0.0, alpha_B_per_L2=800.0, **SMALL)
+    prob, x = _perturbed(model, amp=0.2)
+    x = _reversed_ring2(x, prob)
+    pairs = cr.chiral_pairs(x, prob, margin=0.5 * prob.delta)
+    E, g = cr.chiral_energy_gradient(x, prob, pairs)
+    assert E > 0
+    err, scale = _fd_check(lambda y: cr.chiral_energy_gradient(y, prob, pairs,
+                                                               want_grad=False)[0],
+                           g, x, range(0, 80, 7))
+    assert err <= FD_REL * scale
+
+
 def test_partner_window_finds_the_global_closest_point():
     model = cr.ChiralRings(lk_ring=0.0, **SMALL)
     prob, x = _perturbed(model, amp=0.05)
     E_global = cr.bilateral_energy_gradient(x, prob, want_grad=False)[0]
-    seg, u, _, d_global, _ = cr.closest_on_other_ring(x, prob, cr.bilateral_candidates(x, prob))
+    d_global = cr.closest_on_other_ring(x, prob, cr.bilateral_candidates(x, prob))[3]
     cr.update_partners(x, prob)
     assert prob.partner is not None
     d_window = cr.closest_on_other_ring(x, prob, cr.bilateral_candidates(x, prob))[3]
@@ -225,6 +240,20 @@ def test_partner_window_finds_the_global_closest_point():
         E_global, rel=1e-12)
     # partners lie on the other ring
     assert np.all(prob.ring_of[prob.partner] != prob.ring_of)
+
+
+def test_stale_partners_are_recentred_not_clamped():
+    """Partners left 2 PARTNER_WINDOW beads behind (a step that slid the rings further than
+    the window): the windowed search re-centres until it finds the global closest point."""
+    model = cr.ChiralRings(lk_ring=0.0, **SMALL)
+    prob, x = _perturbed(model, amp=0.05)
+    d_global = cr.closest_on_other_ring(x, prob, cr.bilateral_candidates(x, prob))[3]
+    true = cr.update_partners(x, prob).copy()
+    prob.partner = prob.along(true, np.full(len(true), -2 * cr.PARTNER_WINDOW))
+    cr.update_partners(x, prob)
+    d = cr.closest_on_other_ring(x, prob, cr.bilateral_candidates(x, prob))[3]
+    np.testing.assert_allclose(d, d_global, rtol=0, atol=1e-14)
+    np.testing.assert_array_equal(prob.partner, true)
 
 
 @pytest.fixture(scope="module")
@@ -261,3 +290,21 @@ def test_continuation_follows_the_twisted_circles(small_circles):
             2 * math.pi * cr.DNA_TWIST_OVER_BEND * r["parameter_value"], abs=1e-6)
     with pytest.raises(UserError, match="parameter"):
         next(cr.continuation(model, small_circles, "n", 1.0, 0.25))
+    with pytest.raises(UserError, match="min_step"):
+        next(cr.continuation(model, small_circles, "lk_ring", 1.0, 0.25, min_step=0.0))
+
+
+@pytest.mark.slow
+def test_continuation_leaves_the_circles_past_michells_threshold(small_circles):
+    """Past Lk_i = 1.17 (Delta/L = 0.05) the circles are a saddle: the continued state
+    escapes it and writhes (Zajac 1962: a subcritical jump), marked as a branch left
+    (measured: 1.125 -> 1.25 in one step, Wr 0.72 per ring, converged in 165 Newton steps
+    from the writhed state of 1.1875; ~1-4 min on one core, hence slow)."""
+    model = cr.ChiralRings(lk_ring=1.125, start_noise=0.0, **SMALL)
+    start = cr.solve(model, small_circles["x"], stability=False)
+    assert not any(abs(w) > 1e-6 for w in start["writhe_per_ring"])
+    rows = list(cr.continuation(model, start, "lk_ring", 1.25, 0.125, min_step=0.125,
+                                max_iter=300))
+    assert [r["parameter_value"] for r in rows] == [1.25]
+    assert rows[0]["branch_left"]
+    assert min(abs(w) for w in rows[0]["writhe_per_ring"]) > cr.WRITHE_JUMP

@@ -20,6 +20,8 @@ results from those logs.
 Writes workflows/results/chiral_rings.json, chiral_rings.md, chiral_rings.png,
 chiral_rings_shapes.png.
 Run: OMP_NUM_THREADS=1 python workflows/chiral_rings.py [--workers 2]
+     OMP_NUM_THREADS=1 python workflows/chiral_rings.py --continue lk_minus5_up2 -5 375 3500 62.5
+     python workflows/chiral_rings.py --assemble
 """
 
 from __future__ import annotations
@@ -77,7 +79,7 @@ def row(phase, r) -> dict:
         "max_gradient_B_per_L2": r["max_gradient_B_per_L2"],
         "saddle_escapes": r.get("saddle_escapes", 0), "jump": r.get("jump", 0.0),
         "branch_left": r.get("branch_left", False), "step": r.get("step"),
-        "wall_time_s": r["wall_time_s"],
+        "gtol_B_per_L2": r.get("gtol_B_per_L2"), "wall_time_s": r["wall_time_s"],
     }
 
 
@@ -127,25 +129,38 @@ def scan(job) -> str:
             for q in cr.continuation(m0, states[lk], "alpha_B_per_L2", target, ALPHA_STEP,
                                      max_iter=300):
                 keep(phase, q, lk, q["parameter_value"])
-                np.save(WORK / f"x_lk{lk:+.0f}_a{q['parameter_value']:.0f}.npy", q["x"])
+                _save_state(lk, q["parameter_value"], q)
     return name
+
+
+def _save_state(lk, alpha, q):
+    """A state and its contact partners, for :func:`continue_scan`."""
+    np.save(WORK / f"x_lk{lk:+.0f}_a{alpha:.0f}.npy", q["x"])
+    np.save(WORK / f"partner_lk{lk:+.0f}_a{alpha:.0f}.npy", q["partner"])
 
 
 def instabilities(rows) -> list:
     """Where a scan left its branch: the two parameter values bracketing it and the zero of
     the lowest eigenvalue extrapolated linearly from the last two rows before it."""
     out = []
-    for k in range(1, len(rows)):
-        b = rows[k]
+    for k, b in enumerate(rows):
         if not b["branch_left"]:
             continue
-        a = rows[k - 1]
+        # the state each step came from: the row before it in its own phase, or for an
+        # alpha scan's first row the alpha = 0 row of its Lk_i (the phases interleave)
+        before = [r for r in rows[:k] if r["phase"] == b["phase"]]
+        if not before and b["phase"] != "lk":
+            before = [r for r in rows[:k] if r["phase"] == "lk"
+                      and abs(r["lk_ring"] - b["lk_ring"]) < 1e-9]
+        if not before:
+            continue
+        a = before[-1]
         par = "lk_ring" if b["phase"] == "lk" else "alpha_B_per_L2"
         rec = {"phase": b["phase"], "bracket": [a[par], b[par]], "parameter": par,
                "writhe_before": a["writhe_per_ring"][0], "writhe_after": b["writhe_per_ring"][0]}
-        if k >= 2 and rows[k - 2]["phase"] == a["phase"]:
-            p0, p1 = rows[k - 2][par], a[par]
-            l0 = rows[k - 2]["lowest_eigenvalues_B_per_L3"][0]
+        if len(before) >= 2 and before[-2]["phase"] == a["phase"]:
+            p0, p1 = before[-2][par], a[par]
+            l0 = before[-2]["lowest_eigenvalues_B_per_L3"][0]
             l1 = a["lowest_eigenvalues_B_per_L3"][0]
             if l0 != l1 and p1 != p0:
                 z = float(p1 - l1 * (p1 - p0) / (l1 - l0))
@@ -182,7 +197,7 @@ def write_md(res) -> str:
          "(ring 1's twisting moment, B/L); eta: mean braid angle over ring 1's beads in "
          "contact with their partners (rad, > 0 left-handed); lam_min: lowest Hessian "
          "eigenvalue with rigid and sliding modes projected out; max grad: the largest "
-         f"force component left (target {res.get('gtol', 2.6e-6):.1e} B/L^2; a row is "
+         f"force component left (target {res['gtol']:.1e} B/L^2; a row is "
          "accepted below 100x the target when Newton stalls). Units B = L = 1.", ""]
     for name, rows in res["scans"].items():
         lk_rows = [r for r in rows if r["phase"] == "lk"]
@@ -311,12 +326,19 @@ def finish(scans: dict, wall_time_s: float, complete: bool) -> None:
            "michell_lk": math.sqrt(3) / cr.DNA_TWIST_OVER_BEND}
     res["instabilities"] = {k: instabilities(v) for k, v in scans.items()}
     res["wall_time_s"] = wall_time_s
+    res["gtol"] = _default_gtol()
     (OUT / "chiral_rings.json").write_text(json.dumps(res, indent=1))
     (OUT / "chiral_rings.md").write_text(write_md(res))
     plot(res, OUT / "chiral_rings.png")
     plot_shapes(OUT / "chiral_rings_shapes.png")
     print(f"wrote {OUT / 'chiral_rings.json'} ({'complete' if complete else 'partial'})",
           flush=True)
+
+
+def _default_gtol() -> float:
+    """relax's default gradient target for the scanned model (B/L^2)."""
+    br = cr.make_problem(cr.ChiralRings()).braid
+    return 1e-6 * br.pressure_scale_pN_per_nm * br.bead_spacing_nm
 
 
 def assemble() -> int:
@@ -328,26 +350,53 @@ def assemble() -> int:
         if rows:
             scans[f.stem] = rows
             wall = max(wall, sum(r["wall_time_s"] for r in rows))
+    # the logs are not committed: a scan stored in the results but without a log here (a
+    # fresh checkout) is kept as stored, never dropped
+    stored = OUT / "chiral_rings.json"
+    if stored.exists():
+        for name, rows in json.loads(stored.read_text())["scans"].items():
+            if name not in scans:
+                print(f"assemble: {name} has no log in {WORK}; kept as stored", flush=True)
+                scans[name] = rows
     finish(scans, wall, complete=False)
     return 0
 
 
+def _rebuild_alpha0(lk: float) -> None:
+    """The alpha = 0 state at ``lk`` by the Lk scan of :func:`scan` (seconds), for a
+    continuation from alpha = 0 in a checkout whose logs and states are gone."""
+    m = cr.ChiralRings(lk_ring=0.0, alpha_B_per_L2=0.0)
+    r = cr.solve(m)
+    for q in cr.continuation(m, r, "lk_ring", lk, LK_STEP, max_iter=300):
+        r = q
+    print(f"rebuilt the alpha = 0 state at Lk_i = {lk:+g}: T1 "
+          f"{r['torque_per_ring_B_per_L'][0]:+.3f}, conv {r['converged']}", flush=True)
+    _save_state(lk, 0.0, r)
+
+
 def continue_scan(name: str, lk: float, alpha_from: float, alpha_to: float,
-                  step: float = ALPHA_STEP) -> None:
-    """An alpha scan at ``lk`` from a saved state (``x_lk{lk}_a{alpha_from}.npy``, with the
-    partners saved at alpha = 0), logged as ``name``: a second process on a branch."""
+                  step: float = ALPHA_STEP, min_step: float | None = None) -> None:
+    """An alpha scan at ``lk`` from a saved state (``x_lk{lk}_a{alpha_from}.npy``), logged as
+    ``name``: a second process on a branch (``--continue``). It starts from the partners
+    saved with that state, or (states saved before 2026-12-05 have none) those saved at
+    alpha = 0, which :func:`~dnabraid.statics.chiral_rings.update_partners` re-centres."""
+    WORK.mkdir(parents=True, exist_ok=True)
+    if alpha_from == 0.0 and not (WORK / f"x_lk{lk:+.0f}_a0.npy").exists():
+        _rebuild_alpha0(lk)
     x = np.load(WORK / f"x_lk{lk:+.0f}_a{alpha_from:.0f}.npy")
-    partner = np.load(WORK / f"partner_lk{lk:+.0f}_a0.npy")
+    own = WORK / f"partner_lk{lk:+.0f}_a{alpha_from:.0f}.npy"
+    partner = np.load(own if own.exists() else WORK / f"partner_lk{lk:+.0f}_a0.npy")
     m0 = cr.ChiralRings(lk_ring=lk, alpha_B_per_L2=alpha_from)
     start = cr.solve(m0, x, partner=partner, max_iter=300)
     log = _log(name)
     log.write_text("")
     phase = "alpha_up" if alpha_to > alpha_from else "alpha_down"
-    for q in cr.continuation(m0, start, "alpha_B_per_L2", alpha_to, step, max_iter=300):
+    for q in cr.continuation(m0, start, "alpha_B_per_L2", alpha_to, step, max_iter=300,
+                             min_step=min_step):
         q["lk"], q["alpha"] = lk, q["parameter_value"]
         with log.open("a") as fh:
             fh.write(json.dumps(row(phase, q)) + "\n")
-        np.save(WORK / f"x_lk{lk:+.0f}_a{q['parameter_value']:.0f}.npy", q["x"])
+        _save_state(lk, q["parameter_value"], q)
         print(f"[{name}] alpha {q['parameter_value']:.0f}: T1 "
               f"{q['torque_per_ring_B_per_L'][0]:+.3f}, conv {q['converged']}", flush=True)
 
@@ -358,10 +407,20 @@ def main(argv=None):
     ap.add_argument("--assemble", action="store_true",
                     help="only write the results from the logs already written "
                          "(chiral_rings.work/*.jsonl), e.g. of an interrupted run")
+    ap.add_argument("--continue", dest="cont", nargs="+", default=None,
+                    metavar="NAME LK ALPHA_FROM ALPHA_TO STEP [MIN_STEP]",
+                    help="continue the alpha scan at Lk_i = LK from its saved state at "
+                         "ALPHA_FROM to ALPHA_TO (B/L^2), logged as NAME (a missing alpha = 0 "
+                         "state is rebuilt); then --assemble")
     a = ap.parse_args(argv)
     OUT.mkdir(exist_ok=True)
     if a.assemble:
         return assemble()
+    if a.cont:
+        if len(a.cont) not in (5, 6):
+            ap.error("--continue takes NAME LK ALPHA_FROM ALPHA_TO STEP [MIN_STEP]")
+        continue_scan(a.cont[0], *(float(v) for v in a.cont[1:]))
+        return 0
     t0 = time.perf_counter()
     with mp.get_context("fork").Pool(a.workers) as pool:
         pool.map(scan, SCANS, chunksize=1)

@@ -61,10 +61,10 @@ Energy (:func:`energy_terms`)
 Relaxation (:func:`relax`)
 --------------------------
 A Levenberg-damped Newton method with a trust radius on the largest bead displacement
-(doubled while clipped steps descend, halved when they do not; a step that changes Lk_12 or
-a writhe by more than 1/2, i.e. passes a strand through another, is refused) on the dense
-Hessian (the twist couples every bead of a
-ring through ``Wr_i``): the stretch/bend/hard-contact parts are the exact sparse Hessians of
+(doubled when a clipped step descends, halved on every refused trial step, clipped or not,
+with the damping raised tenfold; a step that changes Lk_12 or a writhe by more than 1/2,
+i.e. passes a strand through another, is refused) on the dense Hessian (the twist couples
+every bead of a ring through ``Wr_i``): the stretch/bend/hard-contact parts are the exact sparse Hessians of
 :mod:`~dnabraid.statics.closed_braid` and :mod:`~dnabraid.forces.segment_contact`; the
 chiral, bilateral and local writhe parts by central differences of their analytic gradients
 over a distance-2 colouring of their sparsity (a few tens of gradient calls); the twist's
@@ -554,15 +554,35 @@ def closest_on_other_ring(x, prob: Problem, cand, newton_steps: int = 5):
     return seg, u[rr, m], q[rr, m], d[rr, m], tq
 
 
+#: Re-centred windowed searches :func:`update_partners` makes before it gives up on a partner
+#: that keeps landing on its window's edge.
+PARTNER_RECENTRES = 8
+
+
 def update_partners(x, prob: Problem) -> np.ndarray:
     """Set ``prob.partner`` to each bead's closest bead of the other ring: found globally
-    the first time, within :data:`PARTNER_WINDOW` of the previous partner afterwards."""
-    seg, u, _, _, _ = closest_on_other_ring(x, prob, bilateral_candidates(x, prob))
-    if np.any(seg < 0):
-        raise ChiralRingsError(f"partners: {int(np.sum(seg < 0))} beads have no point of the "
-                               "other ring within 1.5 Delta (contact lost)")
-    prob.partner = np.where(u < 0.5, seg, prob.nxt[seg]).astype(int)
-    return prob.partner
+    the first time, within :data:`PARTNER_WINDOW` of the previous partner afterwards.
+
+    A closest point on the window's first or last end point may lie beyond it (a step that
+    slid the rings by more than the window): the window is re-centred there and searched
+    again, up to :data:`PARTNER_RECENTRES` times; a partner still on the edge after that is
+    an error, never a silently clamped contact."""
+    for _ in range(PARTNER_RECENTRES + 1):
+        windowed = prob.partner is not None
+        cand = bilateral_candidates(x, prob)
+        seg, u, _, _, _ = closest_on_other_ring(x, prob, cand)
+        if np.any(seg < 0):
+            raise ChiralRingsError(f"partners: {int(np.sum(seg < 0))} beads have no point of "
+                                   "the other ring within 1.5 Delta (contact lost)")
+        prob.partner = np.where(u < 0.5, seg, prob.nxt[seg]).astype(int)
+        if not windowed:
+            return prob.partner
+        edge = ((seg == cand[:, 0]) & (u <= 1e-12)) | ((seg == cand[:, -1]) & (u >= 1 - 1e-12))
+        if not np.any(edge):
+            return prob.partner
+    raise ChiralRingsError(f"partners: {int(np.sum(edge))} beads' closest points stay on the "
+                           f"edge of their {2 * PARTNER_WINDOW + 1}-segment window after "
+                           f"{PARTNER_RECENTRES} re-centred searches")
 
 
 def bilateral_energy_gradient(x, prob: Problem, cand=None, want_grad=True):
@@ -784,8 +804,9 @@ def relax(model: ChiralRings, x0, *, gtol: float | None = None, max_iter: int = 
     gtol = 1e-6 * f_scale if gtol is None else float(gtol)
     pinned = cb.pinned_dofs(x)
     free = np.setdiff1d(np.arange(3 * N), pinned)
-    # trust radius on the largest bead displacement: grows while clipped steps descend
-    # (a buckled ring travels many Delta to its writhed branch), shrinks when they do not
+    # trust radius on the largest bead displacement: doubles when a clipped step descends
+    # (a buckled ring travels many Delta to its writhed branch), halves on every refused
+    # trial (clipped or not; 12 clipped successes bring it back from its floor)
     max_step = 0.25 * prob.delta
     step_range = (1e-3 * prob.delta, MAX_STEP_OVER_DIAMETER * prob.delta)
     slide_stiffness = SLIDE_STIFFNESS
@@ -884,7 +905,8 @@ MAX_STEP_OVER_DIAMETER = 4.0
 
 
 def _topology(x, prob: Problem) -> np.ndarray:
-    """(Lk_12, Wr_1, Wr_2): a strand passage changes Lk_12 or a writhe by 2."""
+    """(Lk_12, Wr_1, Wr_2): a strand passage changes Lk_12 by 1 (between the rings) or a
+    ring's writhe by 2 (within it)."""
     return np.array([gauss_linking_number(x[prob.ring(0)], x[prob.ring(1)]),
                      *ring_writhes(x, prob)])
 
@@ -1009,8 +1031,8 @@ def solve(model: ChiralRings, x0=None, *, progress=None, stability: bool = True,
 
 # -- continuation ------------------------------------------------------------------------------
 
-#: A step whose ring writhe changes by more than this (turns) has left the branch it came
-#: from (a buckling jump or a fold); the continuation halves the step to locate it.
+#: A step whose ring writhe (either ring) changes by more than this (turns) has left the
+#: branch it came from (a buckling jump or a fold); it is kept and marked, not refined.
 WRITHE_JUMP = 0.25
 
 
@@ -1037,14 +1059,16 @@ def continuation(model: ChiralRings, start: dict, parameter: str, target: float,
     value = float(getattr(model, parameter))
     direction = math.copysign(1.0, target - value)
     h = abs(step)
-    h_min = h / 4 if min_step is None else abs(min_step)
+    h_min = h / 4 if min_step is None else float(min_step)
+    if not 0 < h_min <= h:
+        raise UserError(f"min_step={min_step!r}: must lie in (0, |step| = {h}]")
     cur = start
     while direction * (target - value) > 1e-12:
         nxt = value + direction * min(h, abs(target - value))
         m = dataclasses.replace(model, **{parameter: nxt})
         r = solve(m, cur["x"], partner=cur.get("partner"), stability=stability,
                   max_iter=max_iter)
-        jump = abs(r["writhe_per_ring"][0] - cur["writhe_per_ring"][0])
+        jump = max(abs(a - b) for a, b in zip(r["writhe_per_ring"], cur["writhe_per_ring"]))
         if not r["converged"] and h > h_min * (1 + 1e-9):
             h = max(h / 2, h_min)
             continue
