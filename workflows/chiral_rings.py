@@ -21,6 +21,7 @@ Writes workflows/results/chiral_rings.json, chiral_rings.md, chiral_rings.png,
 chiral_rings_shapes.png.
 Run: OMP_NUM_THREADS=1 python workflows/chiral_rings.py [--workers 2]
      OMP_NUM_THREADS=1 python workflows/chiral_rings.py --continue lk_minus5_up2 -5 375 3500 62.5
+     OMP_NUM_THREADS=1 python workflows/chiral_rings.py --continue lk_down_up -1 0 625 62.5 62.5
      python workflows/chiral_rings.py --assemble
 """
 
