@@ -1,22 +1,14 @@
 """The mapped swap of the trap-angle replica exchange (workflows/lk_exchange.py, docs/validation.md
 2.3n): its inverse, what it moves, and the twist energy it adds against rod theory."""
 
-import importlib.util
-import os
 
+from conftest import load_workflow
 import numpy as np
 import pytest
 
-HERE = os.path.dirname(os.path.abspath(__file__))
-
-
 @pytest.fixture(scope="module")
 def lx():
-    path = os.path.join(HERE, "..", "workflows", "lk_exchange.py")
-    spec = importlib.util.spec_from_file_location("lk_exchange", path)
-    mod = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(mod)
-    return mod
+    return load_workflow("lk_exchange")
 
 
 def test_swap_map_is_a_twist_of_the_chain_with_its_torsional_stiffness(lx):

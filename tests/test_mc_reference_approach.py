@@ -2,23 +2,15 @@
 plectoneme_mc_reference.py, docs/validation.md 2.3q): the trap-angle protocol each one runs,
 and the Welch comparison of their chain means."""
 
-import importlib.util
 import math
-import os
 
+from conftest import load_workflow
 import numpy as np
 import pytest
 
-HERE = os.path.dirname(os.path.abspath(__file__))
-
-
 @pytest.fixture(scope="module")
 def ref():
-    path = os.path.join(HERE, "..", "workflows", "plectoneme_mc_reference.py")
-    spec = importlib.util.spec_from_file_location("plectoneme_mc_reference", path)
-    mod = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(mod)
-    return mod
+    return load_workflow("plectoneme_mc_reference")
 
 
 class _Recorder:
