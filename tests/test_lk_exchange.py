@@ -1,10 +1,10 @@
 """The mapped swap of the trap-angle replica exchange (workflows/lk_exchange.py, docs/validation.md
 2.3n): its inverse, what it moves, and the twist energy it adds against rod theory."""
 
-
 from conftest import load_workflow
 import numpy as np
 import pytest
+
 
 @pytest.fixture(scope="module")
 def lx():
