@@ -338,8 +338,7 @@ def finish(scans: dict, wall_time_s: float, complete: bool) -> None:
 
 def _default_gtol() -> float:
     """relax's default gradient target for the scanned model (B/L^2)."""
-    br = cr.make_problem(cr.ChiralRings()).braid
-    return 1e-6 * br.pressure_scale_pN_per_nm * br.bead_spacing_nm
+    return cr.default_gtol(cr.make_problem(cr.ChiralRings()))
 
 
 def assemble() -> int:

@@ -567,8 +567,8 @@ def update_partners(x, prob: Problem) -> np.ndarray:
     slid the rings by more than the window): the window is re-centred there and searched
     again, up to :data:`PARTNER_RECENTRES` times; a partner still on the edge after that is
     an error, never a silently clamped contact."""
+    windowed = prob.partner is not None
     for _ in range(PARTNER_RECENTRES + 1):
-        windowed = prob.partner is not None
         cand = bilateral_candidates(x, prob)
         seg, u, _, _, _ = closest_on_other_ring(x, prob, cand)
         if np.any(seg < 0):
@@ -783,6 +783,13 @@ def hessian(x, prob: Problem, lists: _Lists | None = None, *, fd_step: float | N
 
 # -- relaxation and stability ------------------------------------------------------------------
 
+def default_gtol(prob: Problem) -> float:
+    """:func:`relax`'s gradient target (B/L^2): 1e-6 x the contact force per bead of
+    closed_braid's pressure scale."""
+    br = prob.braid
+    return 1e-6 * br.pressure_scale_pN_per_nm * br.bead_spacing_nm
+
+
 def relax(model: ChiralRings, x0, *, gtol: float | None = None, max_iter: int = 200,
           progress=None, prob: Problem | None = None) -> dict:
     """Levenberg-damped Newton minimisation of the energy from ``x0`` ((N, 3), L).
@@ -799,9 +806,7 @@ def relax(model: ChiralRings, x0, *, gtol: float | None = None, max_iter: int = 
     N = len(x)
     if x.shape != (prob.n_beads, 3):
         raise UserError(f"x0 has shape {x.shape}, expected ({prob.n_beads}, 3)")
-    br = prob.braid
-    f_scale = br.pressure_scale_pN_per_nm * br.bead_spacing_nm
-    gtol = 1e-6 * f_scale if gtol is None else float(gtol)
+    gtol = default_gtol(prob) if gtol is None else float(gtol)
     pinned = cb.pinned_dofs(x)
     free = np.setdiff1d(np.arange(3 * N), pinned)
     # trust radius on the largest bead displacement: doubles when a clipped step descends

@@ -23,12 +23,7 @@ STAGE_TURNS = 3.0 / ref.RAMP_STAGES
 
 
 def ramp_between(mv, pos, n_from, n_to):
-    k = int(round(abs(n_to - n_from) / STAGE_TURNS))
-    for i in range(k + 1):
-        mv.energy.set_trap_angle(2 * math.pi * (n_from + (n_to - n_from) * i / k))
-        pos, _ = mv.run(pos, ref.RAMP_MOVES)
-    pos, _ = mv.run(pos, ref.EQ_MOVES)
-    return pos
+    return ref.ramp_between(mv, pos, n_from, n_to, STAGE_TURNS)
 
 
 def run(seed):
