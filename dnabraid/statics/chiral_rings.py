@@ -65,8 +65,8 @@ A Levenberg-damped Newton method with a trust radius on the largest bead displac
 with the damping raised tenfold; a step that changes Lk_12 or a writhe by more than 1/2,
 i.e. passes a strand through another, is refused) on the dense Hessian (the twist couples
 every bead of a ring through ``Wr_i``): the stretch/bend/hard-contact parts are the exact
-sparse Hessians of :mod:`~dnabraid.statics.closed_braid` and :mod:`~dnabraid.forces.segment_contact`; the
-chiral, bilateral and local writhe parts by central differences of their analytic gradients
+sparse Hessians of :mod:`~dnabraid.statics.closed_braid` and
+:mod:`~dnabraid.forces.segment_contact`; the chiral, bilateral and local writhe parts by central differences of their analytic gradients
 over a distance-2 colouring of their sparsity (a few tens of gradient calls); the twist's
 rank-one part ``(4 pi^2 C / L) grad Wr grad Wr^T`` exactly. Six coordinates pin the rigid
 modes (:func:`~dnabraid.statics.closed_braid.pinned_dofs`). Stability (:func:`lowest_modes`):
