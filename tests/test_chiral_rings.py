@@ -309,3 +309,46 @@ def test_continuation_leaves_the_circles_past_michells_threshold(small_circles):
     assert [r["parameter_value"] for r in rows] == [1.25]
     assert rows[0]["branch_left"]
     assert min(abs(w) for w in rows[0]["writhe_per_ring"]) > cr.WRITHE_JUMP
+
+
+def test_lk12_sign_is_ring_2s_orientation_not_the_links_handedness():
+    """DNA is apolar: reversing ring 2's direction flips the Gauss Lk_12 (-1 -> +1) and
+    changes neither the energy (the chiral term folds eta, docs/chirality.md Eq. C3) nor the
+    folded braid angle that the thermal catenane measures (geometry.curves.crossing_angles):
+    the catenane's "Lk_12 = +1" (hopf_start orients ring 2 to give +1) and this solver's
+    "Lk_12 = -1" (both rings run parallel along the ply) can name the same left-handed
+    link. The handedness is the sign of the folded eta (+0.126 = 2 asin(pi Delta/L) at
+    Delta/L = 0.02, the uniform ply), not the sign of Lk_12."""
+    from dnabraid.geometry.curves import crossing_angles
+    from dnabraid.scenes.catenane import hopf_start
+
+    model = cr.ChiralRings(lk_ring=0.0, alpha_B_per_L2=500.0)
+    prob, x = _perturbed(model, amp=0.05)
+    sl = prob.ring(1)
+    y = x.copy()
+    y[sl] = x[sl][::-1]
+    r1 = x[prob.ring(0)]
+    assert gauss_linking_number(r1, x[sl]) == pytest.approx(-1.0, abs=1e-6)
+    assert gauss_linking_number(r1, y[sl]) == pytest.approx(+1.0, abs=1e-6)
+    assert cr.energy(y, prob) == pytest.approx(cr.energy(x, prob), rel=1e-12)
+    assert cr.chiral_energy_gradient(y, prob, want_grad=False)[0] > 0   # disfavoured hand
+    # the folded angle on the unperturbed ply, per segment of ring 1 at its closest segment
+    # of ring 2 (on the polygon that closest point is often a bead shared by two segments,
+    # and the order picks one: per-segment values move, 0.072-0.158 rad, their mean 3e-4)
+    x0 = cr.initial_geometry(cr.ChiralRings(lk_ring=0.0, start_noise=0.0))
+    c1, c2 = x0[prob.ring(0)], x0[sl]
+    cut = 1.05 * prob.delta
+    e_x = crossing_angles(np.vstack([c1, c1[:1]]), np.vstack([c2, c2[:1]]), cut)[0]
+    c2 = c2[::-1]
+    e_y = crossing_angles(np.vstack([c1, c1[:1]]), np.vstack([c2, c2[:1]]), cut)[0]
+    assert len(e_x) == len(e_y) == len(c1)
+    assert np.mean(e_y) == pytest.approx(np.mean(e_x), abs=1e-3)
+    # both left-handed, as the uniform ply's 2 asin(pi Delta/L) = +0.1257 (segment
+    # closest points read 3 % low at b = Delta/2)
+    eta_ply = 2 * math.asin(math.pi * 0.02)
+    assert min(np.mean(e_x), np.mean(e_y)) == pytest.approx(eta_ply, rel=0.05)
+    # the catenane's start: link = -1 is link = +1 with ring 2 run backwards
+    a, b = hopf_start(24, 3.0, link=1), hopf_start(24, 3.0, link=-1)
+    np.testing.assert_allclose(a[0], b[0])
+    np.testing.assert_allclose(np.sort(a[1], axis=0), np.sort(b[1], axis=0))
+    assert round(gauss_linking_number(*a)) == -round(gauss_linking_number(*b))
