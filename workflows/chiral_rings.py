@@ -112,18 +112,13 @@ def scan(job) -> str:
             f"({rw['iterations']} it, g {rw['max_gradient_B_per_L2']:.2g}), "
             f"left {rw['branch_left']}")
 
-    m = cr.ChiralRings(lk_ring=0.0, alpha_B_per_L2=0.0)
-    r = cr.solve(m)
+    m, r = _lk_walk(None, None, 0.0)
     keep("lk", r, 0.0, 0.0)
     states = {}
     for lk in lk_targets:
-        for q in cr.continuation(m, r, "lk_ring", lk, LK_STEP, max_iter=300):
-            keep("lk", q, q["parameter_value"], 0.0)
-            r = q
-        m = cr.ChiralRings(lk_ring=lk, alpha_B_per_L2=0.0)
+        m, r = _lk_walk(m, r, lk, lambda q: keep("lk", q, q["parameter_value"], 0.0))
         states[lk] = r
-        np.save(WORK / f"x_lk{lk:+.0f}_a0.npy", r["x"])
-        np.save(WORK / f"partner_lk{lk:+.0f}_a0.npy", r["partner"])
+        _save_state(lk, 0.0, r)
     for lk in alpha_lks:
         m0 = cr.ChiralRings(lk_ring=lk, alpha_B_per_L2=0.0)
         for target, phase in ((ALPHA_MAX, "alpha_up"), (ALPHA_MIN, "alpha_down")):
@@ -132,6 +127,21 @@ def scan(job) -> str:
                 keep(phase, q, lk, q["parameter_value"])
                 _save_state(lk, q["parameter_value"], q)
     return name
+
+
+def _lk_walk(m, r, lk, each=None):
+    """From state ``r`` of model ``m`` (None: the relaxed Lk_i = 0 circles) at alpha = 0 to
+    Lk_i = ``lk`` in steps of :data:`LK_STEP`, ``each`` called on every row; returns the
+    model at ``lk`` and its state."""
+    if m is None:
+        m = cr.ChiralRings(lk_ring=0.0, alpha_B_per_L2=0.0)
+        r = cr.solve(m)
+    if lk != m.lk_ring:
+        for q in cr.continuation(m, r, "lk_ring", lk, LK_STEP, max_iter=300):
+            if each is not None:
+                each(q)
+            r = q
+    return cr.ChiralRings(lk_ring=lk, alpha_B_per_L2=0.0), r
 
 
 def _save_state(lk, alpha, q):
@@ -365,10 +375,7 @@ def assemble() -> int:
 def _rebuild_alpha0(lk: float) -> None:
     """The alpha = 0 state at ``lk`` by the Lk scan of :func:`scan` (seconds), for a
     continuation from alpha = 0 in a checkout whose logs and states are gone."""
-    m = cr.ChiralRings(lk_ring=0.0, alpha_B_per_L2=0.0)
-    r = cr.solve(m)
-    for q in cr.continuation(m, r, "lk_ring", lk, LK_STEP, max_iter=300):
-        r = q
+    _, r = _lk_walk(None, None, lk)
     print(f"rebuilt the alpha = 0 state at Lk_i = {lk:+g}: T1 "
           f"{r['torque_per_ring_B_per_L'][0]:+.3f}, conv {r['converged']}", flush=True)
     _save_state(lk, 0.0, r)
