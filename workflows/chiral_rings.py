@@ -184,6 +184,92 @@ def instabilities(rows) -> list:
     return out
 
 
+def lk_ladder(scans) -> list:
+    """One row per Lk_i with an alpha > 0 scan, from every scan's rows (the scans of one
+    Lk_i merged by alpha; where two rows share an alpha the converged one, then the later
+    one): the circles or writhed state at alpha = 0, where the branch was first left or
+    Newton first failed, and the last converged row before that."""
+    by_lk = {}
+    zero = {}
+    for rows in scans.values():
+        for r in rows:
+            if r["phase"] == "lk":
+                zero[round(r["lk_ring"], 6)] = r
+            elif r["phase"] == "alpha_up":
+                by_lk.setdefault(round(r["lk_ring"], 6), {})
+                a = r["alpha_B_per_L2"]
+                old = by_lk[round(r["lk_ring"], 6)].get(a)
+                if old is None or r["converged"] or not old["converged"]:
+                    by_lk[round(r["lk_ring"], 6)][a] = r
+    out = []
+    for lk in sorted(by_lk):
+        z = zero.get(lk)
+        rows = [by_lk[lk][a] for a in sorted(by_lk[lk])]
+        if z is not None:
+            rows = [z] + rows
+        first_bad, last_good = None, None
+        for k, r in enumerate(rows):
+            if r["branch_left"] or not r["converged"]:
+                first_bad = (rows[k - 1]["alpha_B_per_L2"] if k else None, r)
+                break
+            last_good = r
+        lam0 = (z or {}).get("lowest_eigenvalues_B_per_L3") or [float("nan")]
+        end = last_good or rows[0]
+        out.append({
+            "lk_ring": lk, "alpha_max_scanned": rows[-1]["alpha_B_per_L2"],
+            "T1_0": z["T1_B_per_L"] if z else None,
+            "Wr1_0": z["writhe_per_ring"][0] if z else None,
+            "eta_0": z["eta_mean_rad"] if z else None, "lam_min_0": lam0[0],
+            "stable_to": end["alpha_B_per_L2"], "T1_end": end["T1_B_per_L"],
+            "Wr1_end": end["writhe_per_ring"][0], "eta_end": end["eta_mean_rad"],
+            "lam_min_end": (end.get("lowest_eigenvalues_B_per_L3") or [float("nan")])[0],
+            "left_at": None if first_bad is None else [first_bad[0],
+                                                       first_bad[1]["alpha_B_per_L2"]],
+            "left_how": None if first_bad is None else (
+                "branch left" if first_bad[1]["branch_left"] else "not converged"),
+            "after": None if first_bad is None else {
+                k: first_bad[1][k] for k in ("T1_B_per_L", "eta_mean_rad", "converged",
+                                             "max_gradient_B_per_L2")}
+            | {"Wr1": first_bad[1]["writhe_per_ring"][0],
+               "lam_min": (first_bad[1].get("lowest_eigenvalues_B_per_L3") or [None])[0]},
+            "branch_left_at": next(([rows[k - 1]["alpha_B_per_L2"], r["alpha_B_per_L2"],
+                                     rows[k - 1]["writhe_per_ring"][0], r["writhe_per_ring"][0]]
+                                    for k, r in enumerate(rows) if k and r["branch_left"]), None),
+        })
+    return out
+
+
+def ladder_md(ladder, gtol: float) -> list:
+    L = ["## The Lk_i ladder at alpha > 0 (all alpha_up rows, merged per Lk_i)", "",
+         "Per Lk_i: the alpha = 0 state (circles for |Lk_i| < 1.16, writhed beyond); the "
+         "last converged row before the branch is first left or Newton first fails "
+         "(`converged to`, alpha in B/L^2, and that row's T1, Wr_1, eta, lam_min in B/L^3); "
+         "`then`: the first row that is not converged or left its branch (its largest force "
+         "against the target gtol, its lam_min); `branch left`: where the scan first jumped "
+         "to another branch, with Wr_1 before and after.", "",
+         "| Lk_i | T1(0) (B/L) | Wr_1(0) | eta(0) (rad) | lam_min(0) | converged to | "
+         "T1 | Wr_1 | eta (rad) | lam_min | then | branch left | scanned to |",
+         "|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
+
+    def f(v, fmt):
+        return "-" if v is None or (isinstance(v, float) and math.isnan(v)) else format(v, fmt)
+
+    for r in ladder:
+        then = "-" if r["left_at"] is None else (
+            f"{r['left_how']} at {r['left_at'][1]:.1f}: grad "
+            f"{r['after']['max_gradient_B_per_L2'] / gtol:.3g} gtol, lam_min "
+            f"{f(r['after']['lam_min'], '.3g')}")
+        bl = r["branch_left_at"]
+        left = "-" if bl is None else (f"({bl[0]:.1f}, {bl[1]:.1f}]: Wr_1 {bl[2]:+.3f} -> "
+                                       f"{bl[3]:+.3f}")
+        L.append(f"| {r['lk_ring']:+.0f} | {f(r['T1_0'], '+.3f')} | {f(r['Wr1_0'], '+.3f')} | "
+                 f"{f(r['eta_0'], '+.4f')} | {f(r['lam_min_0'], '.3g')} | "
+                 f"{r['stable_to']:.1f} | {r['T1_end']:+.3f} | {r['Wr1_end']:+.3f} | "
+                 f"{f(r['eta_end'], '+.4f')} | {f(r['lam_min_end'], '.3g')} | {then} | {left} | "
+                 f"{r['alpha_max_scanned']:.1f} |")
+    return L + [""]
+
+
 def _fmt_row(r, par):
     lam = r["lowest_eigenvalues_B_per_L3"]
     # the Hessian's lowest eigenvalue is a stability statement only at an equilibrium
@@ -224,6 +310,7 @@ def write_md(res) -> str:
                 L += [_fmt_row(r, "alpha_B_per_L2") for r in ar]
                 L.append("")
         L += [f"Branches left ({name}): {json.dumps(res['instabilities'][name])}", ""]
+    L += ladder_md(res["ladder"], res["gtol"])
     L += [f"Wall time {res['wall_time_s']:.0f} s (the longest scan). "
           + ("" if res.get("complete", True) else "PARTIAL: assembled from the logs of an "
              "interrupted run; the missing rows were not reached."), ""]
@@ -336,6 +423,7 @@ def finish(scans: dict, wall_time_s: float, complete: bool) -> None:
            "scans": scans, "complete": complete, "slide32_read_off": SLIDE32_READ_OFF,
            "michell_lk": math.sqrt(3) / cr.DNA_TWIST_OVER_BEND}
     res["instabilities"] = {k: instabilities(v) for k, v in scans.items()}
+    res["ladder"] = lk_ladder(scans)
     res["wall_time_s"] = wall_time_s
     res["gtol"] = _default_gtol()
     (OUT / "chiral_rings.json").write_text(json.dumps(res, indent=1))
