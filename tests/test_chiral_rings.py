@@ -352,3 +352,28 @@ def test_lk12_sign_is_ring_2s_orientation_not_the_links_handedness():
     np.testing.assert_allclose(a[0], b[0])
     np.testing.assert_allclose(np.sort(a[1], axis=0), np.sort(b[1], axis=0))
     assert round(gauss_linking_number(*a)) == -round(gauss_linking_number(*b))
+
+
+def test_folded_eta_is_apolar_and_mirror_odd():
+    """The solver's reported braid angle (``eta_folded_mean_rad``) is the apolar one: eta and
+    eta +- pi fold to one value in (-pi/2, pi/2] (docs/chirality.md, Eq. C3, as the chiral
+    term folds them), so reversing ring 2 (every contact's eta moves by pi) leaves it
+    unchanged to round-off while the plain atan2 mean moves by radians; a mirror image
+    flips its sign (the energy, achiral at alpha = 0, is unchanged)."""
+    assert cr.fold_eta(2.281) == pytest.approx(2.281 - math.pi, abs=1e-12)
+    assert cr.fold_eta(-0.4) == pytest.approx(-0.4, abs=1e-12)
+    assert cr.fold_eta(-math.pi / 2) == pytest.approx(math.pi / 2, abs=1e-12)
+    model = cr.ChiralRings(lk_ring=0.0, alpha_B_per_L2=0.0)
+    prob, x = _perturbed(model, amp=0.05)
+    sl = prob.ring(1)
+    rev = x.copy()
+    rev[sl] = x[sl][::-1]
+    mir = x * np.array([-1.0, 1.0, 1.0])
+    a, b, c = (cr.measure(y, prob) for y in (x, rev, mir))
+    assert a["eta_folded_mean_rad"] == pytest.approx(2 * math.asin(math.pi * 0.02), rel=0.1)
+    assert b["eta_folded_mean_rad"] == pytest.approx(a["eta_folded_mean_rad"], abs=1e-9)
+    # the plain mean: each eta moves by pi, and those that wrap at +-pi pull the mean back
+    # (2.05 rad here), so it is no measure of the hand
+    assert abs(b["eta_mean_rad"] - a["eta_mean_rad"]) > 1.5
+    assert c["eta_folded_mean_rad"] == pytest.approx(-a["eta_folded_mean_rad"], abs=1e-9)
+    assert c["energy_B_per_L"] == pytest.approx(a["energy_B_per_L"], rel=1e-12)

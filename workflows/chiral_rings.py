@@ -70,7 +70,9 @@ def row(phase, r) -> dict:
         "twist_per_ring": r["twist_per_ring"], "writhe_per_ring": r["writhe_per_ring"],
         "linking_number": r["linking_number"],
         "eta_mean_rad": r["eta_mean_rad"], "eta_min_rad": r["eta_min_rad"],
-        "eta_max_rad": r["eta_max_rad"], "contact_fraction": r["contact_fraction"],
+        "eta_max_rad": r["eta_max_rad"],
+        "eta_folded_mean_rad": r.get("eta_folded_mean_rad"),
+        "contact_fraction": r["contact_fraction"],
         "pulling_fraction": r["pulling_fraction"],
         "max_overlap_over_diameter": r["max_overlap_over_diameter"],
         "lowest_eigenvalues_B_per_L3": lam,
@@ -184,6 +186,17 @@ def instabilities(rows) -> list:
     return out
 
 
+def eta_folded(r):
+    """A row's mean apolar braid angle (rad, folded into (-pi/2, pi/2]): stored since
+    2026-12-05; for an older row its plain mean where every contact lies within +-pi/2
+    (the two agree there), else None (not recoverable from the row)."""
+    if r.get("eta_folded_mean_rad") is not None:
+        return r["eta_folded_mean_rad"]
+    if -math.pi / 2 < r["eta_min_rad"] and r["eta_max_rad"] <= math.pi / 2:
+        return r["eta_mean_rad"]
+    return None
+
+
 def lk_ladder(scans) -> list:
     """One row per Lk_i with an alpha > 0 scan, from every scan's rows (the scans of one
     Lk_i merged by alpha; where two rows share an alpha the converged one, then the later
@@ -219,18 +232,18 @@ def lk_ladder(scans) -> list:
             "lk_ring": lk, "alpha_max_scanned": rows[-1]["alpha_B_per_L2"],
             "T1_0": z["T1_B_per_L"] if z else None,
             "Wr1_0": z["writhe_per_ring"][0] if z else None,
-            "eta_0": z["eta_mean_rad"] if z else None, "lam_min_0": lam0[0],
+            "eta_0": eta_folded(z) if z else None, "lam_min_0": lam0[0],
             "stable_to": end["alpha_B_per_L2"], "T1_end": end["T1_B_per_L"],
-            "Wr1_end": end["writhe_per_ring"][0], "eta_end": end["eta_mean_rad"],
+            "Wr1_end": end["writhe_per_ring"][0], "eta_end": eta_folded(end),
             "lam_min_end": (end.get("lowest_eigenvalues_B_per_L3") or [float("nan")])[0],
             "left_at": None if first_bad is None else [first_bad[0],
                                                        first_bad[1]["alpha_B_per_L2"]],
             "left_how": None if first_bad is None else (
                 "branch left" if first_bad[1]["branch_left"] else "not converged"),
             "after": None if first_bad is None else {
-                k: first_bad[1][k] for k in ("T1_B_per_L", "eta_mean_rad", "converged",
+                k: first_bad[1][k] for k in ("T1_B_per_L", "converged",
                                              "max_gradient_B_per_L2")}
-            | {"Wr1": first_bad[1]["writhe_per_ring"][0],
+            | {"Wr1": first_bad[1]["writhe_per_ring"][0], "eta": eta_folded(first_bad[1]),
                "lam_min": (first_bad[1].get("lowest_eigenvalues_B_per_L3") or [None])[0]},
             "branch_left_at": next(([rows[k - 1]["alpha_B_per_L2"], r["alpha_B_per_L2"],
                                      rows[k - 1]["writhe_per_ring"][0], r["writhe_per_ring"][0]]
@@ -244,21 +257,22 @@ def ladder_md(ladder, gtol: float) -> list:
          "Per Lk_i: the alpha = 0 state (circles for |Lk_i| < 1.16, writhed beyond); the "
          "last converged row before the branch is first left or Newton first fails "
          "(`converged to`, alpha in B/L^2, and that row's T1, Wr_1, eta, lam_min in B/L^3); "
-         "`then`: the first row that is not converged or left its branch (its largest force "
-         "against the target gtol, its lam_min); `branch left`: where the scan first jumped "
+         "`then`: the first row that is not converged or left its branch (its largest force, "
+         f"target gtol = {gtol:.2g} B/L^2, and its lam_min if converged); eta: the mean apolar braid "
+         "angle at contact (folded into (-pi/2, pi/2]); `branch left`: where the scan first jumped "
          "to another branch, with Wr_1 before and after.", "",
          "| Lk_i | T1(0) (B/L) | Wr_1(0) | eta(0) (rad) | lam_min(0) | converged to | "
          "T1 | Wr_1 | eta (rad) | lam_min | then | branch left | scanned to |",
          "|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
 
-    def f(v, fmt):
-        return "-" if v is None or (isinstance(v, float) and math.isnan(v)) else format(v, fmt)
-
+    f = _f
     for r in ladder:
         then = "-" if r["left_at"] is None else (
-            f"{r['left_how']} at {r['left_at'][1]:.1f}: grad "
-            f"{r['after']['max_gradient_B_per_L2'] / gtol:.3g} gtol, lam_min "
-            f"{f(r['after']['lam_min'], '.3g')}")
+            f"{r['left_how']} at {r['left_at'][1]:.1f}: largest force "
+            f"{r['after']['max_gradient_B_per_L2']:.2g} B/L^2"
+            # the lowest eigenvalue is a stability statement only at an equilibrium
+            + (f", lam_min {f(r['after']['lam_min'], '.3g')}" if r["after"]["converged"] else
+               ""))
         bl = r["branch_left_at"]
         left = "-" if bl is None else (f"({bl[0]:.1f}, {bl[1]:.1f}]: Wr_1 {bl[2]:+.3f} -> "
                                        f"{bl[3]:+.3f}")
@@ -270,6 +284,14 @@ def ladder_md(ladder, gtol: float) -> list:
     return L + [""]
 
 
+def _f(v, fmt):
+    return "-" if v is None or (isinstance(v, float) and math.isnan(v)) else format(v, fmt)
+
+
+def _nan(v):
+    return float("nan") if v is None else v
+
+
 def _fmt_row(r, par):
     lam = r["lowest_eigenvalues_B_per_L3"]
     # the Hessian's lowest eigenvalue is a stability statement only at an equilibrium
@@ -277,13 +299,13 @@ def _fmt_row(r, par):
     note = ", ".join(([] if r["converged"] else ["NOT CONVERGED"])
                      + (["branch left"] if r["branch_left"] else []))
     return (f"| {r[par]:+.3f} | {r['T1_B_per_L']:+.3f} | {r['twist_per_ring'][0]:+.3f} | "
-            f"{r['writhe_per_ring'][0]:+.3f} | {r['eta_mean_rad']:+.4f} | "
+            f"{r['writhe_per_ring'][0]:+.3f} | {_f(eta_folded(r), '+.4f')} | "
             f"{r['eta_min_rad']:+.3f} / {r['eta_max_rad']:+.3f} | {lam_s} | "
             f"{r['energy_B_per_L']:.2f} | {r['max_gradient_B_per_L2']:.1e} | {note} |")
 
 
 def write_md(res) -> str:
-    head = ("| {p} | T1 (B/L) | Tw_1 | Wr_1 | eta mean (rad) | eta min / max | lam_min (B/L^3) "
+    head = ("| {p} | T1 (B/L) | Tw_1 | Wr_1 | eta mean, folded (rad) | eta min / max (unfolded) | lam_min (B/L^3) "
             "| E (B/L) | max grad (B/L^2) | note |")
     sep = "|---|---|---|---|---|---|---|---|---|---|"
     L = ["# The seed's chiral linked rings at T = 0 (`workflows/chiral_rings.py`)", "",
@@ -343,11 +365,11 @@ def plot(res, path):
                 a = [r["alpha_B_per_L2"] for r in ar]
                 ln, = ax[1].plot(a, [r["T1_B_per_L"] for r in ar], mk, ms=3,
                                  label=f"Lk_i = {lk:+.0f} ({phase})")
-                ax[2].plot(a, [r["eta_mean_rad"] for r in ar], mk, ms=3, color=ln.get_color(),
+                ax[2].plot(a, [_nan(eta_folded(r)) for r in ar], mk, ms=3, color=ln.get_color(),
                            label=f"Lk_i = {lk:+.0f} ({phase})")
                 bad = [r for r in ar if not r["converged"]]
-                for k, key in ((1, "T1_B_per_L"), (2, "eta_mean_rad")):
-                    ax[k].plot([r["alpha_B_per_L2"] for r in bad], [r[key] for r in bad], "x",
+                for k, get in ((1, lambda r: r["T1_B_per_L"]), (2, lambda r: _nan(eta_folded(r)))):
+                    ax[k].plot([r["alpha_B_per_L2"] for r in bad], [get(r) for r in bad], "x",
                                ms=5, color="k", label=None if (labelled or not bad) else
                                "not converged")
                 labelled = labelled or bool(bad)
@@ -369,7 +391,7 @@ def plot(res, path):
     ax[1].legend(fontsize=6)
     ax[2].axhline(0, color="k", lw=0.5)
     ax[2].set_xlabel("alpha (B/L^2)")
-    ax[2].set_ylabel("mean contact eta (rad)")
+    ax[2].set_ylabel("mean contact eta, folded (rad)")
     ax[2].legend(fontsize=6)
     fig.tight_layout()
     fig.savefig(path, dpi=120)
@@ -484,8 +506,10 @@ def continue_scan(name: str, lk: float, alpha_from: float, alpha_to: float,
     m0 = cr.ChiralRings(lk_ring=lk, alpha_B_per_L2=alpha_from)
     start = cr.solve(m0, x, partner=partner, max_iter=300)
     log = _log(name)
-    log.write_text("")
     phase = "alpha_up" if alpha_to > alpha_from else "alpha_down"
+    # the start is a row too: at alpha = 0 it is the ladder's alpha = 0 state (phase "lk")
+    start["lk"], start["alpha"] = lk, alpha_from
+    log.write_text(json.dumps(row("lk" if alpha_from == 0.0 else phase, start)) + "\n")
     for q in cr.continuation(m0, start, "alpha_B_per_L2", alpha_to, step, max_iter=300,
                              min_step=min_step):
         q["lk"], q["alpha"] = lk, q["parameter_value"]

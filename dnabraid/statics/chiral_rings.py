@@ -559,6 +559,13 @@ def closest_on_other_ring(x, prob: Problem, cand, newton_steps: int = 5):
 PARTNER_RECENTRES = 8
 
 
+def fold_eta(eta):
+    """The apolar braid angle: ``eta`` (rad) folded into (-pi/2, pi/2] (eta and eta +- pi
+    describe one crossing of two apolar strands; the chiral term folds them alike)."""
+    eta = np.asarray(eta, float)
+    return np.pi / 2 - np.mod(np.pi / 2 - eta, np.pi)
+
+
 def update_partners(x, prob: Problem) -> np.ndarray:
     """Set ``prob.partner`` to each bead's closest bead of the other ring: found globally
     the first time, within :data:`PARTNER_WINDOW` of the previous partner afterwards.
@@ -977,6 +984,10 @@ def measure(x, prob: Problem) -> dict:
         "eta_mean_rad": float(np.nanmean(np.where(in_contact, eta, np.nan)))
         if np.any(in_contact) else float("nan"),
         "eta_min_rad": float(np.nanmin(eta)), "eta_max_rad": float(np.nanmax(eta)),
+        # the apolar braid angle (eta and eta +- pi are one crossing of apolar strands, as
+        # the chiral term folds them): in (-pi/2, pi/2], unchanged by reversing a ring
+        "eta_folded_mean_rad": float(np.nanmean(np.where(in_contact, fold_eta(eta), np.nan)))
+        if np.any(in_contact) else float("nan"),
         "tan_half_eta_contact_integral_L": float(np.sum(np.where(in_contact, np.tan(eta / 2), 0.0))
                                                  * prob.b),
         "energy_terms_B_per_L": {k: float(v) for k, v in terms.items()},
