@@ -377,3 +377,31 @@ def test_folded_eta_is_apolar_and_mirror_odd():
     assert abs(b["eta_mean_rad"] - a["eta_mean_rad"]) > 1.5
     assert c["eta_folded_mean_rad"] == pytest.approx(-a["eta_folded_mean_rad"], abs=1e-9)
     assert c["energy_B_per_L"] == pytest.approx(a["energy_B_per_L"], rel=1e-12)
+
+
+def test_mirror_image_is_the_opposite_hand_at_minus_lk_with_equal_energy():
+    """:func:`cr.mirror_image` (z -> -z, ring 2 reversed, partners mapped): every twist,
+    writhe and the folded eta change sign, the Gauss Lk_12 stays -1 (the solver's
+    convention), the alpha = 0 energy at -Lk_i equals the original's at Lk_i to round-off,
+    and the chiral energy changes sign (mirror-odd, reversal-even)."""
+    model = cr.ChiralRings(lk_ring=0.7, alpha_B_per_L2=0.0, **SMALL)
+    prob, x = _perturbed(model, amp=0.1, seed=4)
+    cr.update_partners(x, prob)
+    y, p2 = cr.mirror_image(x, prob.partner, prob)
+    img = cr.make_problem(dataclass_replace(model, lk_ring=-0.7))
+    img.partner = p2
+    a, b = cr.measure(x, prob), cr.measure(y, img)
+    assert b["linking_number"] == pytest.approx(a["linking_number"], abs=1e-9)
+    assert round(a["linking_number"]) == -1
+    assert np.allclose(b["writhe_per_ring"], -np.asarray(a["writhe_per_ring"]), atol=1e-12)
+    assert np.allclose(b["twist_per_ring"], -np.asarray(a["twist_per_ring"]), atol=1e-12)
+    assert b["eta_folded_mean_rad"] == pytest.approx(-a["eta_folded_mean_rad"], abs=1e-9)
+    assert cr.energy(y, img) == pytest.approx(cr.energy(x, prob), rel=1e-12)
+    chi = cr.make_problem(dataclass_replace(model, alpha_B_per_L2=900.0))
+    chi.partner = prob.partner
+    chi_img = cr.make_problem(dataclass_replace(model, lk_ring=-0.7, alpha_B_per_L2=900.0))
+    chi_img.partner = p2
+    E = cr.chiral_energy_gradient(x, chi, want_grad=False)[0]
+    assert E != 0.0
+    assert cr.chiral_energy_gradient(y, chi_img, want_grad=False)[0] == pytest.approx(
+        -E, rel=1e-10)

@@ -146,10 +146,11 @@ def _lk_walk(m, r, lk, each=None):
     return cr.ChiralRings(lk_ring=lk, alpha_B_per_L2=0.0), r
 
 
-def _save_state(lk, alpha, q):
-    """A state and its contact partners, for :func:`continue_scan`."""
-    np.save(WORK / f"x_lk{lk:+.0f}_a{alpha:.0f}.npy", q["x"])
-    np.save(WORK / f"partner_lk{lk:+.0f}_a{alpha:.0f}.npy", q["partner"])
+def _save_state(lk, alpha, q, tag=""):
+    """A state and its contact partners, for :func:`continue_scan` (``tag``: a branch other
+    than the scans' own, e.g. ``"mirror_"``, so that it never overwrites theirs)."""
+    np.save(WORK / f"{tag}x_lk{lk:+.0f}_a{alpha:.0f}.npy", q["x"])
+    np.save(WORK / f"{tag}partner_lk{lk:+.0f}_a{alpha:.0f}.npy", q["partner"])
 
 
 def instabilities(rows) -> list:
@@ -520,6 +521,45 @@ def continue_scan(name: str, lk: float, alpha_from: float, alpha_to: float,
               f"{q['torque_per_ring_B_per_L'][0]:+.3f}, conv {q['converged']}", flush=True)
 
 
+MIRROR_NAME = "mirror_plus3"
+
+
+def mirror_scan(lk_from: float = -3.0, alpha_to: float = ALPHA_MAX,
+                step: float = ALPHA_STEP) -> None:
+    """The handedness asymmetry on the ladder: the alpha scan of the mirror image
+    (:func:`~dnabraid.statics.chiral_rings.mirror_image`) of the alpha = 0 state at ``lk_from``, logged as
+    :data:`MIRROR_NAME` (``--mirror``). At alpha = 0 the two are one state seen in a mirror
+    (energy equal, T1 and Wr opposite, eta opposite); alpha != 0 tells the hands apart."""
+    WORK.mkdir(parents=True, exist_ok=True)
+    if not (WORK / f"x_lk{lk_from:+.0f}_a0.npy").exists():
+        _rebuild_alpha0(lk_from)
+    x = np.load(WORK / f"x_lk{lk_from:+.0f}_a0.npy")
+    partner = np.load(WORK / f"partner_lk{lk_from:+.0f}_a0.npy")
+    m_src = cr.ChiralRings(lk_ring=lk_from, alpha_B_per_L2=0.0)
+    src = cr.solve(m_src, x, partner=partner, max_iter=300)
+    y, p2 = cr.mirror_image(src["x"], src["partner"], cr.make_problem(m_src))
+    lk = -lk_from
+    m0 = cr.ChiralRings(lk_ring=lk, alpha_B_per_L2=0.0)
+    start = cr.solve(m0, y, partner=p2, max_iter=300)
+    print(f"mirror of Lk_i {lk_from:+g}: E {src['energy_B_per_L']:.6f} -> "
+          f"{start['energy_B_per_L']:.6f} B/L, T1 {src['torque_per_ring_B_per_L'][0]:+.4f} "
+          f"-> {start['torque_per_ring_B_per_L'][0]:+.4f}, eta (folded) "
+          f"{src['eta_folded_mean_rad']:+.4f} -> {start['eta_folded_mean_rad']:+.4f}",
+          flush=True)
+    log = _log(MIRROR_NAME)
+    start["lk"], start["alpha"] = lk, 0.0
+    log.write_text(json.dumps(row("lk", start) | {"mirror_of_lk": lk_from}) + "\n")
+    for q in cr.continuation(m0, start, "alpha_B_per_L2", alpha_to, step, max_iter=300):
+        q["lk"], q["alpha"] = lk, q["parameter_value"]
+        with log.open("a") as fh:
+            fh.write(json.dumps(row("alpha_up", q) | {"mirror_of_lk": lk_from}) + "\n")
+        _save_state(lk, q["parameter_value"], q, tag="mirror_")
+        print(f"[{MIRROR_NAME}] alpha {q['parameter_value']:.0f}: T1 "
+              f"{q['torque_per_ring_B_per_L'][0]:+.3f}, Wr "
+              f"{q['writhe_per_ring'][0]:+.3f}, eta (folded) "
+              f"{q['eta_folded_mean_rad']:+.4f}, conv {q['converged']}", flush=True)
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--workers", type=int, default=2)
@@ -531,8 +571,14 @@ def main(argv=None):
                     help="continue the alpha scan at Lk_i = LK from its saved state at "
                          "ALPHA_FROM to ALPHA_TO (B/L^2), logged as NAME (a missing alpha = 0 "
                          "state is rebuilt); then --assemble")
+    ap.add_argument("--mirror", action="store_true",
+                    help="the alpha scan of the mirror image of the Lk_i = -3 state "
+                         f"(logged as {MIRROR_NAME}); then --assemble")
     a = ap.parse_args(argv)
     OUT.mkdir(exist_ok=True)
+    if a.mirror:
+        mirror_scan()
+        return 0
     if a.assemble:
         return assemble()
     if a.cont:

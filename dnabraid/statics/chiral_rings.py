@@ -566,6 +566,25 @@ def fold_eta(eta):
     return np.pi / 2 - np.mod(np.pi / 2 - eta, np.pi)
 
 
+def mirror_image(x, partner, prob):
+    """The mirror image (z -> -z) of a state with ring 2 reversed, and its partners mapped
+    bead by bead. Mirroring flips every writhe, twist and Lk_i and the link's hand;
+    reversing ring 2 (DNA is apolar: no energy changes) flips the Gauss Lk_12 back to the
+    solver's -1, so the image is a state of the same solver at -Lk_i with the opposite
+    hand, equal in energy at alpha = 0 (partners mapped, not searched again: the bilateral
+    energy depends on the assignment)."""
+    sl = prob.ring(1)
+    idx = np.arange(prob.n_beads)
+    rev = idx.copy()
+    rev[sl] = idx[sl][::-1]            # bead j of ring 2 -> its index after reversal
+    y = np.asarray(x, float) * np.array([1.0, 1.0, -1.0])
+    y = y[rev]
+    partner = np.asarray(partner, int)
+    new = np.empty_like(partner)
+    new[rev] = rev[partner]            # both the bead and its partner renumbered
+    return y, new
+
+
 def update_partners(x, prob: Problem) -> np.ndarray:
     """Set ``prob.partner`` to each bead's closest bead of the other ring: found globally
     the first time, within :data:`PARTNER_WINDOW` of the previous partner afterwards.
