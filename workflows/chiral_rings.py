@@ -206,6 +206,8 @@ def lk_ladder(scans) -> list:
     by_lk = {}
     zero = {}
     for rows in scans.values():
+        if any("mirror_of_lk" in r for r in rows):
+            continue  # the other hand: its own table (:func:`mirror_md`)
         for r in rows:
             if r["phase"] == "lk":
                 zero[round(r["lk_ring"], 6)] = r
@@ -285,6 +287,60 @@ def ladder_md(ladder, gtol: float) -> list:
     return L + [""]
 
 
+def mirror_pairs(scans) -> list:
+    """Rows of the mirror scan beside the rows of its source Lk_i at the same alpha (the
+    converged one where two share an alpha): the handedness asymmetry on the ladder."""
+    mir = [r for rows in scans.values() for r in rows if "mirror_of_lk" in r]
+    if not mir:
+        return []
+    src_lk = mir[0]["mirror_of_lk"]
+    src = {}
+    for name, rows in scans.items():
+        for r in rows:
+            if "mirror_of_lk" in r or abs(r["lk_ring"] - src_lk) > 1e-9:
+                continue
+            if r["phase"] == "lk" or r["phase"] == "alpha_up":
+                old = src.get(r["alpha_B_per_L2"])
+                if old is None or r["converged"] or not old["converged"]:
+                    src[r["alpha_B_per_L2"]] = r
+    return [(src.get(r["alpha_B_per_L2"]), r) for r in mir]
+
+
+def mirror_md(pairs) -> list:
+    if not pairs:
+        return []
+    lk = pairs[0][1]["mirror_of_lk"]
+    L = [f"## The two hands at |Lk_i| = {abs(lk):.0f}: Lk_i = {lk:+.0f} (left-handed link) "
+         f"and its mirror image at {-lk:+.0f} (right-handed; `--mirror`)", "",
+         "At alpha = 0 one state seen in a mirror (E equal, T1, Wr_1, eta opposite); "
+         "sum T1 = T1(left) + T1(right) and sum eta are zero there and measure the "
+         "handedness asymmetry of the chiral term at alpha != 0. eta: folded mean (rad). "
+         "'*': not converged or branch left.", "",
+         f"| alpha (B/L^2) | T1 ({lk:+.0f}) | Wr_1 | eta | T1 (mirror) | Wr_1 | eta | "
+         "sum T1 | sum eta | E (left) | E (mirror) |",
+         "|---|---|---|---|---|---|---|---|---|---|---|"]
+
+    def ok(r):
+        return r["converged"] and not r["branch_left"]
+
+    for a, b in pairs:
+        fa = "-" if a is None else (f"{a['T1_B_per_L']:+.3f}{'' if ok(a) else '*'} | "
+                                    f"{a['writhe_per_ring'][0]:+.3f} | "
+                                    f"{_f(eta_folded(a), '+.4f')}")
+        if a is None:
+            fa = "- | - | -"
+        fb = (f"{b['T1_B_per_L']:+.3f}{'' if ok(b) else '*'} | "
+              f"{b['writhe_per_ring'][0]:+.3f} | {_f(eta_folded(b), '+.4f')}")
+        both = a is not None and ok(a) and ok(b)
+        st = f"{a['T1_B_per_L'] + b['T1_B_per_L']:+.3f}" if both else "-"
+        se = (f"{eta_folded(a) + eta_folded(b):+.4f}" if both and eta_folded(a) is not None
+              and eta_folded(b) is not None else "-")
+        ea = "-" if a is None else f"{a['energy_B_per_L']:.3f}"
+        L.append(f"| {b['alpha_B_per_L2']:.1f} | {fa} | {fb} | {st} | {se} | {ea} | "
+                 f"{b['energy_B_per_L']:.3f} |")
+    return L + [""]
+
+
 def _f(v, fmt):
     return "-" if v is None or (isinstance(v, float) and math.isnan(v)) else format(v, fmt)
 
@@ -334,6 +390,7 @@ def write_md(res) -> str:
                 L.append("")
         L += [f"Branches left ({name}): {json.dumps(res['instabilities'][name])}", ""]
     L += ladder_md(res["ladder"], res["gtol"])
+    L += mirror_md(mirror_pairs(res["scans"]))
     L += [f"Wall time {res['wall_time_s']:.0f} s (the longest scan). "
           + ("" if res.get("complete", True) else "PARTIAL: assembled from the logs of an "
              "interrupted run; the missing rows were not reached."), ""]
@@ -346,7 +403,7 @@ def plot(res, path):
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    fig, ax = plt.subplots(1, 3, figsize=(15, 4.4))
+    fig, ax = plt.subplots(1, 3, figsize=(20, 4.8), gridspec_kw={"wspace": 0.55})
     labelled = False
     for name, rows in res["scans"].items():
         lk_rows = [r for r in rows if r["phase"] == "lk"]
@@ -364,10 +421,14 @@ def plot(res, path):
             if len(ar) > 1:
                 lk = ar[-1]["lk_ring"]
                 a = [r["alpha_B_per_L2"] for r in ar]
-                ln, = ax[1].plot(a, [r["T1_B_per_L"] for r in ar], mk, ms=3,
-                                 label=f"Lk_i = {lk:+.0f} ({phase})")
+                # the mirror scan is the other hand of the link: dashed, named
+                lab = (f"Lk_i = {lk:+.0f}, mirror of {ar[-1]['mirror_of_lk']:+.0f} "
+                       "(right-handed link)" if "mirror_of_lk" in ar[-1]
+                       else f"Lk_i = {lk:+.0f} ({phase})")
+                mk = "s--" if "mirror_of_lk" in ar[-1] else mk
+                ln, = ax[1].plot(a, [r["T1_B_per_L"] for r in ar], mk, ms=3, label=lab)
                 ax[2].plot(a, [_nan(eta_folded(r)) for r in ar], mk, ms=3, color=ln.get_color(),
-                           label=f"Lk_i = {lk:+.0f} ({phase})")
+                           label=lab)
                 bad = [r for r in ar if not r["converged"]]
                 for k, get in ((1, lambda r: r["T1_B_per_L"]), (2, lambda r: _nan(eta_folded(r)))):
                     ax[k].plot([r["alpha_B_per_L2"] for r in bad], [get(r) for r in bad], "x",
@@ -389,12 +450,12 @@ def plot(res, path):
     ax[1].axhspan(-12, 0, color="0.9", zorder=-1, label="slide 32 T1 axis (axis labels)")
     ax[1].set_xlabel("alpha (B/L^2)")
     ax[1].set_ylabel("T1 = 2 pi C (Lk_1 - Wr_1)/L (B/L)")
-    ax[1].legend(fontsize=6)
+    ax[1].legend(fontsize=5, loc="center left", bbox_to_anchor=(1.0, 0.5))
     ax[2].axhline(0, color="k", lw=0.5)
     ax[2].set_xlabel("alpha (B/L^2)")
     ax[2].set_ylabel("mean contact eta, folded (rad)")
-    ax[2].legend(fontsize=6)
-    fig.tight_layout()
+    ax[2].legend(fontsize=5, loc="center left", bbox_to_anchor=(1.0, 0.5))
+    fig.subplots_adjust(left=0.04, right=0.90, bottom=0.12, top=0.95)
     fig.savefig(path, dpi=120)
 
 
@@ -475,10 +536,12 @@ def assemble() -> int:
     # fresh checkout) is kept as stored, never dropped
     stored = OUT / "chiral_rings.json"
     if stored.exists():
-        for name, rows in json.loads(stored.read_text())["scans"].items():
+        old = json.loads(stored.read_text())
+        for name, rows in old["scans"].items():
             if name not in scans:
                 print(f"assemble: {name} has no log in {WORK}; kept as stored", flush=True)
                 scans[name] = rows
+                wall = max(wall, sum(r["wall_time_s"] for r in rows))
     finish(scans, wall, complete=False)
     return 0
 
