@@ -22,6 +22,7 @@ chiral_rings_shapes.png.
 Run: OMP_NUM_THREADS=1 python workflows/chiral_rings.py [--workers 2]
      OMP_NUM_THREADS=1 python workflows/chiral_rings.py --continue lk_minus5_up2 -5 375 3500 62.5
      OMP_NUM_THREADS=1 python workflows/chiral_rings.py --continue lk_down_up -1 0 625 62.5 62.5
+     OMP_NUM_THREADS=1 python workflows/chiral_rings.py --mirror   (the other hand at +3)
      python workflows/chiral_rings.py --assemble
 """
 
@@ -261,7 +262,8 @@ def ladder_md(ladder, gtol: float) -> list:
          "last converged row before the branch is first left or Newton first fails "
          "(`converged to`, alpha in B/L^2, and that row's T1, Wr_1, eta, lam_min in B/L^3); "
          "`then`: the first row that is not converged or left its branch (its largest force, "
-         f"target gtol = {gtol:.2g} B/L^2, and its lam_min if converged); eta: the mean apolar braid "
+         f"target gtol = {gtol:.2g} B/L^2, and its lam_min if converged); eta: the mean "
+         "apolar braid "
          "angle at contact (folded into (-pi/2, pi/2]); `branch left`: where the scan first jumped "
          "to another branch, with Wr_1 before and after.", "",
          "| Lk_i | T1(0) (B/L) | Wr_1(0) | eta(0) (rad) | lam_min(0) | converged to | "
@@ -362,7 +364,8 @@ def _fmt_row(r, par):
 
 
 def write_md(res) -> str:
-    head = ("| {p} | T1 (B/L) | Tw_1 | Wr_1 | eta mean, folded (rad) | eta min / max (unfolded) | lam_min (B/L^3) "
+    head = ("| {p} | T1 (B/L) | Tw_1 | Wr_1 | eta mean, folded (rad) | "
+            "eta min / max (unfolded) | lam_min (B/L^3) "
             "| E (B/L) | max grad (B/L^2) | note |")
     sep = "|---|---|---|---|---|---|---|---|---|---|"
     L = ["# The seed's chiral linked rings at T = 0 (`workflows/chiral_rings.py`)", "",
@@ -590,8 +593,8 @@ MIRROR_NAME = "mirror_plus3"
 def mirror_scan(lk_from: float = -3.0, alpha_to: float = ALPHA_MAX,
                 step: float = ALPHA_STEP) -> None:
     """The handedness asymmetry on the ladder: the alpha scan of the mirror image
-    (:func:`~dnabraid.statics.chiral_rings.mirror_image`) of the alpha = 0 state at ``lk_from``, logged as
-    :data:`MIRROR_NAME` (``--mirror``). At alpha = 0 the two are one state seen in a mirror
+    (:func:`~dnabraid.statics.chiral_rings.mirror_image`) of the alpha = 0 state at
+    ``lk_from``, logged as :data:`MIRROR_NAME` (``--mirror``). At alpha = 0 the two are one state seen in a mirror
     (energy equal, T1 and Wr opposite, eta opposite); alpha != 0 tells the hands apart."""
     WORK.mkdir(parents=True, exist_ok=True)
     if not (WORK / f"x_lk{lk_from:+.0f}_a0.npy").exists():
