@@ -27,7 +27,7 @@ ABS = 1e-6
 
 def _scene(**kw):
     return make_scene("braid", dict({"length_nm": 100.0, "force_pN": 2.0, "replicas": 1,
-                                     "turns": [0.0]}, **kw))
+                                     "turns": [0.0], "mc_moves": 0}, **kw))
 
 
 def _configs(sc, m, rng, turns=(0.0, 1.5, -2.0)):
@@ -239,8 +239,10 @@ def test_the_passage_pretest_changes_no_decision():
 
 
 def test_braid_scene_keys():
-    assert _scene().mc_moves == 0 and make_scene("braid").mc_moves == 0
+    # moves are on by default since 2026-12-06 (docs/validation.md 1.6); 0 = dynamics alone
+    assert _scene().mc_moves == 0 and make_scene("braid").mc_moves == 3000
     assert _scene().build().moves is None
+    assert isinstance(make_scene("braid").build().moves, BraidMoves)
     m = _scene(mc_moves=10).build()
     assert isinstance(m.moves, BraidMoves)
     # the chiral term has its compiled twin (tests/test_kernels_segments.py)

@@ -16,7 +16,13 @@ from dnabraid.scenes import SceneError, make_scene
 
 SMALL = dict(length_nm=60.0, force_pN=2.0, tether_separation_nm=30.0, replicas=2,
              steps=3000, equilibration_steps=1000, report_interval=100, frame_interval=1000,
-             seed=5, workers=1)
+             seed=5, workers=1, mc_moves=0)
+# Brownian dynamics alone (mc_moves = 0): OpenMM's single-precision positions leave the pair
+# ~1e-5 nm apart, and with the default's Metropolis moves a decision near its threshold
+# flips sooner or later and the pair decorrelates (measured 2026-12-06, seed 5, n = +-2:
+# after 27 of 30 report intervals in one replica, not within 30 in the other). Pairs with
+# moves stay valid in law (the paired estimator's error is the scatter of the pairs), not
+# sample by sample; the moves' own covariance is tests/test_braid_mirror_moves.py.
 
 
 def _pair(tmp_path, alpha, n=2.0, pack=0):

@@ -14,7 +14,10 @@ from dnabraid.scenes import make_scene
 
 SHORT = {"length_nm": 60.0, "tether_separation_nm": 20.0, "turns": [-1.0, 0.0, 1.0],
          "steps": 3000, "equilibration_steps": 500, "frame_interval": 500, "seed": 5,
-         "replicas": 2, "workers": 1, "protocol": "ramp"}
+         "replicas": 2, "workers": 1, "protocol": "ramp", "mc_moves": 300}
+# with Metropolis moves (the braid's default since 2026-12-06): a resumed run repeated the
+# uninterrupted one only after the moves' stretch ratio was taken per segment
+# (BraidMoves.restart)
 
 
 class Interrupt(Exception):

@@ -18,7 +18,7 @@ def test_defaults_resolve_and_roundtrip(tmp_path):
         p.write_text(s.to_toml())
         assert make_scene(str(p)) == s
     s = make_scene("braid")
-    assert s.n_beads == 13 and len(s.build().chains) == 2
+    assert s.n_beads == 21 and len(s.build().chains) == 2  # 100 nm / 5 nm + 1
     assert s.effective_diameter_nm == pytest.approx(4.9)
 
 
@@ -97,7 +97,8 @@ def test_passage_barrier_includes_bond_stretch():
     assert passage_barrier_kT(b, 4.9, 1100.0 / b / 4.1164) < MIN_PASSAGE_BARRIER_KT
     with pytest.raises(SceneError, match="bond stretch included"):
         make_scene("braid", {"bead_spacing_nm": 6.25, "length_nm": 200.0})
-    make_scene("braid", {"bead_spacing_nm": 6.25, "length_nm": 200.0, "stretch": "constraints"})
+    make_scene("braid", {"bead_spacing_nm": 6.25, "length_nm": 200.0, "stretch": "constraints",
+                         "mc_moves": 0})
 
 
 def test_seeds_give_distinct_integrator_seeds():

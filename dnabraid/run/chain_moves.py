@@ -348,7 +348,7 @@ class BraidMoves(ChainMoves):
         Largest |log lambda| of a stretch move (0 leaves it out).
     stretch_ratio : float or None
         a in mu = lambda^-a; None: <b_z^2> / <b_xy^2> of the strands' bonds at the first
-        call (clipped to [1, 100]), then fixed.
+        call after each :meth:`restart` (clipped to [1, 100]), then fixed.
     breathe_eps : float
         Largest |log mu| of a breathe move (the braid opened about its pairs' midpoints,
         bond lengths kept; 0 leaves it out).
@@ -410,6 +410,7 @@ class BraidMoves(ChainMoves):
         if stretch_ratio is not None and not stretch_ratio > 0:
             raise ValueError("stretch_ratio must be > 0")
         self.stretch_ratio = None if stretch_ratio is None else float(stretch_ratio)
+        self._given_ratio = self.stretch_ratio
         self._chains = chains
         self.shear_z_nm = float(shear_z_nm)
         self.crank_max = int(crank_max_beads)
@@ -452,6 +453,13 @@ class BraidMoves(ChainMoves):
         """Moves of a built braid model (its chains, fixed beads, bead centre and kT)."""
         return cls(LocalEnergy(model), model.chains, model.fixed, model.bead_center,
                    model.dna.kT, **kw)
+
+    def restart(self, stream: int) -> None:
+        """As :meth:`ChainMoves.restart`; a stretch ratio taken from the positions is taken
+        again at the next call, so that a segment's moves depend on its own start alone (a
+        resumed run then repeats an uninterrupted one to all digits)."""
+        super().restart(stream)
+        self.stretch_ratio = self._given_ratio
 
     def _run(self, pos: np.ndarray, n: int) -> tuple[np.ndarray, float]:
         uni = self.rng.random((n, 6))

@@ -65,33 +65,39 @@ class Braid(TurnedScene):
                            "braided by turning the bead: extension, torque and catenation "
                            "against turns")
 
-    # The default scene (2026-12-01, README "How the default was chosen"): 2 x 60 nm at
-    # 20 pN, half and whole turns, 8 packed replicas of 4.5e5 steps at safety 0.6: every
-    # point converged (R-hat <= 1.015, ESS >= 559 at 4e5 steps) in ~2.4 minutes on 2 cores.
-    # At 3.5e5 steps 3 of 30 points in 6 seeds were flagged (one replica's equilibration
-    # cut > 50 %: a slow fluctuation, not a transient), hence 4.5e5.
-    # At 10 pN the pendulum mode of the bead, tau = L (2 zeta_l L / 3 + 2 zeta + zeta_C) / F
-    # (docs/slow_modes.md), left n = 0 at ESS 87 with 7e5 steps.
-    force_pN: float = key(20.0, "pN", "constant force pulling the magnetic bead up (> 0)")
-    length_nm: float = key(60.0, "nm", "contour length of each DNA molecule")
+    # The default scene (2026-12-06, docs/validation.md 1.6): 2 x 100 nm at 2 pN (the
+    # forces of magnetic-tweezer braiding; Charvin et al. 2005 braid at 0.5-5 pN), half and
+    # whole turns to +-1 (the braid buckles between 1 and 2 turns at this length and force:
+    # n = +-2 read 45.7-49.4 nm with R-hat 1.6-1.8), 4 replicas of 1e4 + 5e4 steps with 3000
+    # compiled Metropolis moves after every report interval, a rotational trap of
+    # K = 2000 pN nm (magnetic torque tweezers: 1e2-1e4 pN nm/rad, Lipfert et al. 2010): every
+    # point converged in ~2.5 minutes on 2 cores. The previous default (2026-12-01 to
+    # 2026-12-05: 2 x 60 nm at 20 pN, Brownian dynamics alone, 8 replicas of 4.5e5 steps,
+    # K = 2e4) is `TOY_BRAID` in tests/conftest.py, kept for the tests written against it.
+    force_pN: float = key(2.0, "pN", "constant force pulling the magnetic bead up (> 0)")
+    length_nm: float = key(100.0, "nm", "contour length of each DNA molecule")
     turns: tuple = key((-1.0, -0.5, 0.0, 0.5, 1.0), "turns", "list of bead turn values n "
                        "(catenation imposed by the rotational trap)")
-    steps: int = key(450000, "steps", "sampling steps per turn value and replica (after "
+    steps: int = key(50000, "steps", "sampling steps per turn value and replica (after "
                      "equilibration)")
-    replicas: int = key(8, "", "independent replicas per turn value, each from its own start "
+    replicas: int = key(4, "", "independent replicas per turn value, each from its own start "
                         "(seed); the error bar is the scatter of their means (Student t)")
     timestep_safety: float = key(0.6, "", "time step = safety x 2 / (mobility x largest "
-                                 "stiffness); 0.6: no resolved bias "
-                                 "(workflows/results/integrator_bias.md)")
-    equilibration_steps: int = key(20000, "steps", "equilibration steps after each change "
+                                 "stiffness); 0.6: no resolved bias at the default "
+                                 "(docs/validation.md 1.6; workflows/results/integrator_bias.md)")
+    equilibration_steps: int = key(10000, "steps", "equilibration steps after each change "
                                    "of turns (more is cut from the data where it is detected)")
+    trap_stiffness_pN_nm: float = key(2000.0, "pN nm", "rotational trap: U = -K cos(phi - "
+                                      "2 pi n); the trap torque's per-sample noise is "
+                                      "sqrt(K kT) (2000: 91 pN nm; 2e4: 287), its lag "
+                                      "sqrt(kT / K) (0.045 rad at 2000)")
     tether_separation_nm: float = key(40.0, "nm", "distance between the two tether points "
                                       "(surface and bead)")
     start_spread: float = key(1.0, "", "how far the replicas' built starts differ (0 = all "
                               "the same; 1 = plateau steepness in [2.5, 6] and a braid-axis "
                               "bow up to 0.25 L, from each replica's seed): overdispersed "
                               "starts let R-hat see an unforgotten start")
-    mc_moves: int = key(0, "", MC_MOVES_HELP)
+    mc_moves: int = key(3000, "", MC_MOVES_HELP)
     crank_angle_rad: float = key(2.0, "rad", "largest crankshaft angle (an arc of 1-8 beads of "
                                  "one strand turned about the line through its neighbours)")
     bead_move_nm: float = key(0.3, "nm", "radius of a single-particle move's ball")
