@@ -33,8 +33,10 @@ def run_pair(alpha: float, n: float, args) -> dict:
              "steps": args.steps, "equilibration_steps": args.steps // 4,
              "frame_interval": 10_000, "replicas": args.replicas, "seed": args.seed,
              "alpha": alpha, "workers": args.workers}
-    if args.mc_moves:
-        fixed["mc_moves"] = args.mc_moves
+    # always given: the braid's default has moves since 2026-12-06, so 0 must be said
+    fixed["mc_moves"] = args.mc_moves
+    if args.trap_stiffness:
+        fixed["trap_stiffness_pN_nm"] = args.trap_stiffness
     if args.contact != "beads":
         fixed["contact"] = args.contact
     if args.equilibration:
@@ -73,6 +75,9 @@ def main(argv=None) -> int:
     ap.add_argument("--mc-moves", type=int, default=0,
                     help="compiled Metropolis moves per report interval (0: Brownian dynamics "
                          "alone); the image draws the mirrored moves (mirror_random)")
+    ap.add_argument("--trap-stiffness", type=float, default=0.0,
+                    help="trap K in pN nm (0: the braid's default, 2000 since 2026-12-06; "
+                         "the tables before ran at 20000)")
     ap.add_argument("--contact", default="beads", help="'beads' or 'capsules'")
     ap.add_argument("--equilibration", type=int, default=0,
                     help="equilibration steps (0: steps / 4)")
