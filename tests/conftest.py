@@ -25,10 +25,9 @@ def load_workflow(name):
 
 
 # The braid's default until 2026-12-05 (2 x 60 nm at 20 pN, Brownian dynamics alone, a stiff
-# trap): the tests written against it pin it here, so that the default scene can follow
-# the experiments (dnabraid/scenes/braid.py, docs/validation.md 1.6).
-TOY_BRAID = {"length_nm": 60.0, "force_pN": 20.0, "steps": 450000, "replicas": 8,
-             "equilibration_steps": 20000, "mc_moves": 0, "trap_stiffness_pN_nm": 20000.0}
+# trap): the tests written against it pin it, so that the default scene can follow the
+# experiments (dnabraid/scenes/braid.py, docs/validation.md 1.6).
+from dnabraid.scenes.braid import TOY_BRAID  # noqa: E402
 
 
 def toy_braid(**over):

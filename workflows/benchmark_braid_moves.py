@@ -36,7 +36,10 @@ def runs(turn_sets, steps, eq, replicas, moves, seed, tmp) -> list[str]:
         for nm in (0, moves):
             s = make_scene("braid", dict(LONG_BRAID, turns=list(turns), steps=steps,
                                          equilibration_steps=eq, replicas=replicas,
-                                         seed=seed, mc_moves=nm))
+                                         seed=seed, mc_moves=nm,
+                                         # pinned: the braid's default trap is K = 2000
+                                         # since 2026-12-06; the stored rows had K = 2e4
+                                         trap_stiffness_pN_nm=20000.0))
             out = os.path.join(tmp, f"t{len(turns)}_m{nm}")
             summ = s.run(out)
             wall = summ["wall_time_s"]

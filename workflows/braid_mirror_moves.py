@@ -54,8 +54,11 @@ AMPS = dict(crank_angle_rad=2.0, bead_move_nm=0.3, shear_nm=3.0, shear_z_nm=1.0,
 
 
 def build(length_nm: float, turns: float, seed: int = 1, **kw):
+    # trap pinned: the braid's default is K = 2000 since 2026-12-06; the stored table was
+    # measured in the stiff trap of the time
     sc = make_scene("braid", dict({"length_nm": length_nm, "force_pN": 2.0, "turns": [turns],
-                                   "replicas": 1, "seed": seed}, **kw))
+                                   "replicas": 1, "seed": seed,
+                                   "trap_stiffness_pN_nm": 20000.0}, **kw))
     return sc, sc.build()
 
 

@@ -41,7 +41,9 @@ def main(argv=None) -> int:
     ap.add_argument("--set", action="append", default=[], metavar="KEY=VALUE")
     ap.add_argument("--out", default=str(HERE / "results" / "braid_move_modes.txt"))
     a = ap.parse_args(argv)
-    keys = dict(LONG_BRAID, turns=[a.turns], mc_moves=a.moves)
+    # trap pinned: the braid's default is K = 2000 since 2026-12-06; the stored rows were
+    # measured in the stiff trap of the time
+    keys = dict(LONG_BRAID, turns=[a.turns], mc_moves=a.moves, trap_stiffness_pN_nm=20000.0)
     for kv in a.set:
         k, v = kv.split("=", 1)
         keys[k] = tomllib.loads(f"v = {v}")["v"]

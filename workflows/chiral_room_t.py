@@ -49,7 +49,10 @@ def run_alpha(alpha: float, args) -> dict:
             "timestep_safety": args.safety, "turns": [-args.turns, args.turns],
             "mc_moves": args.mc_moves, "steps": args.steps,
             "equilibration_steps": args.equilibration, "replicas": args.replicas,
-            "seed": args.seed, "alpha": alpha, "workers": args.workers}
+            "seed": args.seed, "alpha": alpha, "workers": args.workers,
+            # pinned: the braid's default trap is K = 2000 since 2026-12-06; the stored
+            # table was measured in the stiff trap of the time
+            "trap_stiffness_pN_nm": 20000.0}
     sc = make_scene("braid", keys)
     d = pathlib.Path(args.out) / f"alpha{alpha:g}"
     t0 = time.perf_counter()

@@ -41,7 +41,10 @@ def main(argv=None) -> int:
             "fixed": {"length_nm": 150.0, "tether_separation_nm": 30.0, "force_pN": 2.0,
                       "timestep_safety": 0.3, "turns": [-n, 0.0, n],
                       "steps": args.steps, "equilibration_steps": 30_000,
-                      "frame_interval": 50_000, "replicas": 1},
+                      "frame_interval": 50_000, "replicas": 1,
+                      # pinned: the braid's default has moves and K = 2000 since
+                      # 2026-12-06; the stored table is Brownian dynamics in the stiff trap
+                      "mc_moves": 0, "trap_stiffness_pN_nm": 20000.0},
             "grid": {"alpha": args.alpha, "seed": list(range(1, args.seeds + 1))}}
     t0 = time.perf_counter()
     res = sweep.run_sweep(spec, out=args.out, workers=args.workers)

@@ -51,7 +51,10 @@ def main(argv=None) -> int:
         sc = make_scene("braid", {**LONG_BRAID, "force_pN": float(f), "turns": list(n),
                                   "steps": args.steps,
                                   "equilibration_steps": args.steps // 4,
-                                  "replicas": args.replicas, "seed": 3})
+                                  "replicas": args.replicas, "seed": 3,
+                                  # pinned: the braid's default has moves and K = 2000
+                                  # since 2026-12-06; the table is BD in the stiff trap
+                                  "mc_moves": 0, "trap_stiffness_pN_nm": 20000.0})
         t0 = time.perf_counter()
         summ = sc.run(str(pathlib.Path(args.out) / f"F{f:g}"))
         wall += time.perf_counter() - t0

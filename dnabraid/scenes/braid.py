@@ -16,8 +16,9 @@ the pivot of both strands above a bead, the bead's tilt about its attachments an
 stretch (the extension with the strands' slack), refusing any move that would pass a
 strand through the other (dnabraid.kernels.braid_moves). They sample the same Boltzmann
 distribution; their time correlations are not physical.
-Opt-in (default 0: Brownian dynamics alone) until the default is re-chosen
-(workflows/results/benchmark_braid_moves.txt).
+On by default since 2026-12-06 (3000 per report interval; ``mc_moves = 0``: Brownian
+dynamics alone, for kinetics; workflows/results/benchmark_braid_moves.txt,
+docs/validation.md 1.6).
 """
 
 from __future__ import annotations
@@ -47,8 +48,12 @@ MAX_START_DRAWS = 200
 #: The long braid: 2 x 200 nm at 2 pN and timestep_safety 0.3, the braid's defaults before
 #: 2026-12-01 (a developed two-ply up to n = +-3). The zero-temperature cross-checks, the
 #: extremes matrix and several workflows were set up and measured on it; the thermal
-#: default is now a short braid at 20 pN, chosen for convergence (README).
+#: default is now 2 x 100 nm at 2 pN with moves (README, docs/validation.md 1.6).
 LONG_BRAID = {"length_nm": 200.0, "force_pN": 2.0, "timestep_safety": 0.3}
+#: The toy braid: the thermal default from 2026-12-01 to 2026-12-05 (2 x 60 nm at 20 pN,
+#: Brownian dynamics alone, a stiff trap). Tests and workflows written against it pin it.
+TOY_BRAID = {"length_nm": 60.0, "force_pN": 20.0, "steps": 450000, "replicas": 8,
+             "equilibration_steps": 20000, "mc_moves": 0, "trap_stiffness_pN_nm": 20000.0}
 
 MC_MOVES_HELP = ("Metropolis moves after every report interval (crankshaft, bead, shear, twist, "
                  "sway, pivot, tilt, stretch, breathe 4:4:0.5:0.5:1:2:1:2:2; "
@@ -71,9 +76,9 @@ class Braid(TurnedScene):
     # n = +-2 read 45.7-49.4 nm with R-hat 1.6-1.8), 4 replicas of 1e4 + 5e4 steps with 3000
     # compiled Metropolis moves after every report interval, a rotational trap of
     # K = 2000 pN nm (magnetic torque tweezers: 1e2-1e4 pN nm/rad, Lipfert et al. 2010): every
-    # point converged in ~2.5 minutes on 2 cores. The previous default (2026-12-01 to
+    # point converged in 221-239 s on 2 cores (six seeds). The previous default (2026-12-01 to
     # 2026-12-05: 2 x 60 nm at 20 pN, Brownian dynamics alone, 8 replicas of 4.5e5 steps,
-    # K = 2e4) is `TOY_BRAID` in tests/conftest.py, kept for the tests written against it.
+    # K = 2e4) is `TOY_BRAID` above, kept for the tests and workflows written against it.
     force_pN: float = key(2.0, "pN", "constant force pulling the magnetic bead up (> 0)")
     length_nm: float = key(100.0, "nm", "contour length of each DNA molecule")
     turns: tuple = key((-1.0, -0.5, 0.0, 0.5, 1.0), "turns", "list of bead turn values n "
