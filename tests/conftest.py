@@ -3,12 +3,22 @@ import os
 
 def pytest_configure(config):
     # OpenMM's CPU platform hands forces to a worker thread; for the small systems of the
-    # tests, one pinned core is 3-4x faster (workflows/benchmark_engine.py).
+    # tests, one pinned core is 3-4x faster (workflows/benchmark_engine.py). The suite runs
+    # on one pytest-xdist worker per core (pyproject: -n auto --dist loadfile): worker k
+    # takes core k; the controller only waits, so it leaves its cores to the workers (they
+    # inherit its mask). Without xdist: one core chosen by process id, so that concurrent
+    # test runs spread over the cores.
     try:
-        # one core, chosen by process id so that concurrent test runs spread over the cores
         cores = sorted(os.sched_getaffinity(0))
-        os.sched_setaffinity(0, {cores[os.getpid() % len(cores)]})
-    except (AttributeError, OSError):
+        worker = os.environ.get("PYTEST_XDIST_WORKER")
+        if worker is not None:
+            k = int(worker.lstrip("gw") or 0)
+        elif getattr(config.option, "numprocesses", None):
+            return  # the xdist controller
+        else:
+            k = os.getpid()
+        os.sched_setaffinity(0, {cores[k % len(cores)]})
+    except (AttributeError, OSError, ValueError):
         pass
 
 
