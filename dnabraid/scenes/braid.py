@@ -76,7 +76,7 @@ class Braid(TurnedScene):
     # n = +-2 read 45.7-49.4 nm with R-hat 1.6-1.8), 4 replicas of 1e4 + 5e4 steps with 3000
     # compiled Metropolis moves after every report interval, a rotational trap of
     # K = 2000 pN nm (magnetic torque tweezers: 1e2-1e4 pN nm/rad, Lipfert et al. 2010): every
-    # point converged in 221-239 s on 2 cores (six seeds). The previous default (2026-12-01 to
+    # point converged in 161-170 s on 2 cores (six seeds). The previous default (2026-12-01 to
     # 2026-12-05: 2 x 60 nm at 20 pN, Brownian dynamics alone, 8 replicas of 4.5e5 steps,
     # K = 2e4) is `TOY_BRAID` above, kept for the tests and workflows written against it.
     force_pN: float = key(2.0, "pN", "constant force pulling the magnetic bead up (> 0)")
