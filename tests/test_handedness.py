@@ -97,7 +97,11 @@ def test_room_temperature_asymmetry_across_seeds(tmp_path):
             "fixed": {"length_nm": 150.0, "tether_separation_nm": 30.0, "force_pN": 2.0,
                       "timestep_safety": 0.3, "turns": [-2.0, 0.0, 2.0], "steps": 150_000,
                       "equilibration_steps": 30_000, "frame_interval": 50_000,
-                      "replicas": 1, "protocol": "ramp"},
+                      "replicas": 1, "protocol": "ramp",
+                      # pinned: measured with Brownian dynamics alone in the stiff trap,
+                      # the braid's defaults until 2026-12-05 (with the new default's
+                      # moves this sweep ran > 30 min instead of 6-10)
+                      "mc_moves": 0, "trap_stiffness_pN_nm": 20000.0},
             "grid": {"alpha": [0.0, 12.0], "seed": [1, 2, 3, 4, 5, 6]}}
     res = sweep.run_sweep(spec, out=str(tmp_path / "sweep"), workers=2)
     pts = {}

@@ -56,8 +56,10 @@ MAX_CATENATION_ERROR = 0.05
 #: the default braid's last bond at the bead within ~700 steps; 2e-4 tears 1 nm beads).
 MATRIX = {"length_nm": 100.0, "report_interval": 100, "replicas": 1, "workers": 1}
 #: Per scene, the defaults the matrix was set up and measured with where they have changed
-#: since: the long braid's force and time step (its length is the matrix's 100 nm).
-SCENE_BASE = {"braid": {k: LONG_BRAID[k] for k in ("force_pN", "timestep_safety")}}
+#: since: the long braid's force and time step (its length is the matrix's 100 nm), and
+#: Brownian dynamics alone in the stiff trap (the braid's defaults until 2026-12-05).
+SCENE_BASE = {"braid": {**{k: LONG_BRAID[k] for k in ("force_pN", "timestep_safety")},
+                        "mc_moves": 0, "trap_stiffness_pN_nm": 2e4}}
 
 OUTCOMES = ("ok", "refused", "stopped", "error")
 
