@@ -177,6 +177,10 @@ def buckling(rows: list[dict]) -> dict:
         tw = 1.0 / np.maximum(te, 1e-9) ** 2
         out["torque_after_pN_nm"] = [float((tw * tq).sum() / tw.sum()),
                                      float(1.0 / math.sqrt(tw.sum()))]
+        # a plateau (two phases coexisting at one torque) has zero slope
+        tcov = np.linalg.inv(X.T @ (X * tw[:, None]))
+        tb = tcov @ (X.T @ (tw * tq))
+        out["torque_slope_pN_nm_per_turn"] = [float(tb[1]), float(math.sqrt(tcov[1, 1]))]
     pre = rows[:k + 1]
     tmax = max(pre, key=lambda r: abs(r["torque_pN_nm"]["mean"]))
     out["torque_before_max_pN_nm"] = [tmax["torque_pN_nm"]["mean"],
@@ -255,8 +259,67 @@ def render(results: list[dict]) -> str:
                 f"Buckling between n = {b['interval'][0]:g} and {b['interval'][1]:g}; "
                 f"largest torque before it {tb[0]:.1f} +- {tb[1]:.1f} pN nm (n = {tb[2]:g}); "
                 + (f"past it ({b['points_after']} points) dz/dn = {sl[0]:.2f} +- {sl[1]:.2f} "
-                   f"nm/turn, torque {ta[0]:.1f} +- {ta[1]:.1f} pN nm." if sl else
+                   f"nm/turn and dGamma/dn = {b['torque_slope_pN_nm_per_turn'][0]:.1f} +- "
+                   f"{b['torque_slope_pN_nm_per_turn'][1]:.1f} pN nm/turn (a plateau: 0; "
+                   f"weighted mean torque {ta[0]:.1f} +- {ta[1]:.1f} pN nm)." if sl else
                    f"{b['points_after']} point(s) past it: no slope."))
+        lines.append("")
+    return "\n".join(lines)
+
+
+def maxwell_check(results: list[dict]) -> str:
+    """Where two or more forces share length, salt and turns: the torque at each force
+    predicted from the lowest force's torque and the extensions between
+    (:func:`dnabraid.analysis.maxwell.torque_from_extension`, dGamma/dF = -(1/2 pi) dz/dn;
+    Mosconi et al. 2009, Eq. 2) against the measured trap torque. The force integral is a
+    trapezoid over the measured forces: its curvature error is not in the error bar. At
+    alpha = 0 with turns from 0 the grid is mirrored to -n (z even, Gamma odd in n)."""
+    from dnabraid.analysis.maxwell import torque_from_extension
+
+    groups = {}
+    for res in results:
+        k = res["keys"]
+        key = (k["length_nm"], k["salt_mM"], k["seed"], tuple(k["turns"]))
+        groups.setdefault(key, []).append(res)
+    lines = []
+    for (L, salt, seed, turns), rs in groups.items():
+        if len(rs) < 2:
+            continue
+        rs = sorted(rs, key=lambda r: r["keys"]["force_pN"])
+        F = [r["keys"]["force_pN"] for r in rs]
+        z = [[row["extension_nm"]["mean"] for row in r["rows"]] for r in rs]
+        ze = [[row["extension_nm"]["sem"] for row in r["rows"]] for r in rs]
+        g0 = [row["torque_pN_nm"]["mean"] for row in rs[0]["rows"]]
+        g0e = [row["torque_pN_nm"]["sem"] for row in rs[0]["rows"]]
+        tt = list(turns)
+        mirrored = tt[0] == 0.0 and all(r["keys"].get("alpha", 0.0) == 0.0 for r in rs)
+        if mirrored:
+            # alpha = 0: z is even and Gamma odd in n, so the grid is extended to -n and
+            # dz/dn at n = 0 is a central difference (a one-sided one reads the kink of z
+            # at n = 0 as a slope: 4.3 pN nm where Gamma(0) = 0 by symmetry)
+            tt = [-t for t in tt[:0:-1]] + tt
+            z = [zz[:0:-1] + zz for zz in z]
+            ze = [ee[:0:-1] + ee for ee in ze]
+            g0 = [-g for g in g0[:0:-1]] + g0
+            g0e = g0e[:0:-1] + g0e
+        m = torque_from_extension(F, tt, z, g0, extension_sem_nm=ze,
+                                  torque_ref_sem_pN_nm=g0e)
+        off = len(turns) - 1 if mirrored else 0
+        lines += [f"### Maxwell relation, 2 x {L:g} nm, {salt:g} mM: torque at "
+                  f"{', '.join(f'{f:g}' for f in F[1:])} pN from {F[0]:g} pN and the "
+                  "extensions", "",
+                  "| F pN | n | predicted pN nm | measured pN nm | z | every point used "
+                  "converged |", "|---|---|---|---|---|---|"]
+        for i in range(1, len(F)):
+            for j, n in enumerate(turns):
+                pr, pe = m["torque_pN_nm"][i, j + off], m["sem_pN_nm"][i, j + off]
+                row = rs[i]["rows"][j]
+                me, mse = row["torque_pN_nm"]["mean"], row["torque_pN_nm"]["sem"]
+                zz = (pr - me) / math.hypot(pe, mse)
+                used = [r["rows"][jj]["converged"] for r in rs
+                        for jj in range(max(0, j - 1), min(len(turns), j + 2))]
+                lines.append(f"| {F[i]:g} | {n:g} | {pr:.1f} +- {pe:.1f} | {me:.1f} +- "
+                             f"{mse:.1f} | {zz:+.2f} | {'yes' if all(used) else 'NO'} |")
         lines.append("")
     return "\n".join(lines)
 
@@ -273,10 +336,10 @@ def cmd_report(a) -> None:
             "curve (closed by vertical rays), Tw braid = Ca - Wr axis (both from the "
             "trajectory frames, read through MDAnalysis). Bimodality: Sarle's coefficient of "
             "the pooled extension samples (1/3 Gaussian, > 5/9 two states).\n\n")
-    (RESULTS / "braid_buckling.md").write_text(head + render(results) + "\n"
-                                               + (a.reading or ""))
+    body = render(results) + "\n" + maxwell_check(results)
+    (RESULTS / "braid_buckling.md").write_text(head + body + "\n" + (a.reading or ""))
     plot(results, RESULTS / "braid_buckling.png")
-    print(head + render(results))
+    print(head + body)
 
 
 def plot(results, path) -> None:
