@@ -349,20 +349,21 @@ def plot(results, path) -> None:
     import matplotlib.pyplot as plt
 
     fig, ax = plt.subplots(1, 3, figsize=(13, 4))
-    for res in results:
+    for idx, res in enumerate(results):
+        c = f"C{idx}"
         k = res["keys"]
         lab = f"2x{k['length_nm']:g} nm, {k['force_pN']:g} pN, {k['salt_mM']:g} mM"
         t = [r["turns"] for r in res["rows"]]
         for i, col in enumerate(("extension_nm", "torque_pN_nm")):
             m = [r[col]["mean"] for r in res["rows"]]
             e = [r[col]["sem"] for r in res["rows"]]
-            h = ax[i].errorbar(t, m, yerr=e, marker="o", capsize=3, label=lab)
+            ax[i].errorbar(t, m, yerr=e, marker="o", capsize=3, label=lab, color=c)
             bad = [j for j, r in enumerate(res["rows"]) if not r["converged"]]
-            ax[i].plot([t[j] for j in bad], [m[j] for j in bad], "o", mfc="white",
-                       color=h[0].get_color())
+            ax[i].plot([t[j] for j in bad], [m[j] for j in bad], "o", ls="none", ms=7,
+                       markerfacecolor="white", markeredgecolor=c, zorder=5)
         ax[2].errorbar(t, [r["wr_axis"][0] for r in res["rows"]],
                        yerr=[r["wr_axis"][1] for r in res["rows"]], marker="o", capsize=3,
-                       label=lab)
+                       label=lab, color=c)
     ax[0].set_ylabel("extension (nm)")
     ax[1].set_ylabel("trap torque (pN nm)")
     ax[2].set_ylabel("writhe of the braid axis (turns)")
