@@ -130,9 +130,12 @@ def analyse(run_dir: pathlib.Path) -> list[dict]:
     from dnabraid.analysis.stats import bimodality
 
     s = json.loads((run_dir / "summary.json").read_text())
-    names = sorted(p.name for p in (run_dir / "replicas" / "r00" / "points").iterdir())
+    # point directories are NNN_turns+X.XXXX: matched to the summary's points by turns
+    names = {round(float(q.name.split("_turns")[1]), 6): q.name
+             for q in (run_dir / "replicas" / "r00" / "points").iterdir()}
     rows = []
-    for p, name in zip(sorted(s["points"], key=lambda q: q["turns"]), names):
+    for p in sorted(s["points"], key=lambda q: q["turns"]):
+        name = names[round(float(p["turns"]), 6)]
         w = axis_writhe(run_dir, name)
         z = pooled_extension(run_dir, name)
         bm = bimodality(z) if z.size >= 3 else {"bc": math.nan, "sd": math.nan}
