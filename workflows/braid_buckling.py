@@ -152,6 +152,17 @@ def analyse(run_dir: pathlib.Path) -> list[dict]:
     return rows
 
 
+def _line_slope(x, rows, col) -> list[float]:
+    """Slope and its standard error of the weighted least-squares line through the rows'
+    ``col`` means against ``x`` (weights 1 / sem^2)."""
+    y = np.array([r[col]["mean"] for r in rows])
+    w = 1.0 / np.maximum([r[col]["sem"] for r in rows], 1e-9) ** 2
+    X = np.c_[np.ones_like(x), x]
+    cov = np.linalg.inv(X.T @ (X * w[:, None]))
+    beta = cov @ (X.T @ (w * y))
+    return [float(beta[1]), float(math.sqrt(cov[1, 1]))]
+
+
 def buckling(rows: list[dict]) -> dict:
     """The buckling interval (first rise of Wr_ax by > WR_RISE per turn), the slope dz/dn
     and the mean torque over the points past it."""
@@ -168,22 +179,13 @@ def buckling(rows: list[dict]) -> dict:
     out["points_after"] = len(post)
     if len(post) >= 2:
         x = np.array([r["turns"] for r in post])
-        y = np.array([r["extension_nm"]["mean"] for r in post])
-        e = np.array([r["extension_nm"]["sem"] for r in post])
-        wts = 1.0 / np.maximum(e, 1e-9) ** 2
-        X = np.c_[np.ones_like(x), x]
-        cov = np.linalg.inv(X.T @ (X * wts[:, None]))
-        beta = cov @ (X.T @ (wts * y))
-        out["slope_nm_per_turn"] = [float(beta[1]), float(math.sqrt(cov[1, 1]))]
+        out["slope_nm_per_turn"] = _line_slope(x, post, "extension_nm")
         tq = np.array([r["torque_pN_nm"]["mean"] for r in post])
-        te = np.array([r["torque_pN_nm"]["sem"] for r in post])
-        tw = 1.0 / np.maximum(te, 1e-9) ** 2
+        tw = 1.0 / np.maximum([r["torque_pN_nm"]["sem"] for r in post], 1e-9) ** 2
         out["torque_after_pN_nm"] = [float((tw * tq).sum() / tw.sum()),
                                      float(1.0 / math.sqrt(tw.sum()))]
         # a plateau (two phases coexisting at one torque) has zero slope
-        tcov = np.linalg.inv(X.T @ (X * tw[:, None]))
-        tb = tcov @ (X.T @ (tw * tq))
-        out["torque_slope_pN_nm_per_turn"] = [float(tb[1]), float(math.sqrt(tcov[1, 1]))]
+        out["torque_slope_pN_nm_per_turn"] = _line_slope(x, post, "torque_pN_nm")
     pre = rows[:k + 1]
     tmax = max(pre, key=lambda r: abs(r["torque_pN_nm"]["mean"]))
     out["torque_before_max_pN_nm"] = [tmax["torque_pN_nm"]["mean"],
