@@ -1139,6 +1139,19 @@ class LocalEnergy:
             self._trap_angle = a
             self.params = self.params._replace(trap_c=math.cos(a), trap_s=math.sin(a))
 
+    @property
+    def pull_force(self) -> float | None:
+        """The pulling force (pN) the kernels use; None without a pull term."""
+        return float(self.params.pull_f) if self.params.has_pull else None
+
+    def set_pull_force(self, force_pN: float) -> None:
+        """Use the pulling force ``force_pN`` (pN; the ``pull`` term -F sum_i s_i z_i with
+        the System's shares s_i) instead of the System's: the rungs of a force ladder
+        (:class:`dnabraid.run.ladder.ForceLadder`)."""
+        if not self.params.has_pull:
+            raise ValueError("LocalEnergy: no pull term")
+        self.params = self.params._replace(pull_f=float(force_pN))
+
     def _pos(self, pos) -> np.ndarray:
         pos = np.ascontiguousarray(pos, dtype=np.float64)
         if pos.shape != (self.n, 3):

@@ -47,9 +47,10 @@ from collections.abc import Callable
 import numba
 import numpy as np
 
-__all__ = ["swap_map", "TrapLadder", "rung_turns", "LadderPlan", "run_ladder_replica",
-           "ladder_summary", "judge_ladder", "direction_split", "ramp_up", "ramp_down",
-           "start_direction", "LADDER_STARTS", "MIN_ROUND_TRIPS", "MIN_LADDERS_PER_END"]
+__all__ = ["swap_map", "ExchangeLadder", "TrapLadder", "ForceLadder", "rung_turns",
+           "LadderPlan", "run_ladder_replica", "ladder_summary", "judge_ladder",
+           "direction_split", "ramp_up", "ramp_down", "start_direction",
+           "LADDER_STARTS", "MIN_ROUND_TRIPS", "MIN_LADDERS_PER_END"]
 
 #: Round trips (a state carried from the lowest rung to the highest and back) every ladder
 #: must make before any of its points can be judged converged, unless the ladders were
@@ -132,65 +133,64 @@ def rung_turns(turns, per_turn: int) -> list[float]:
     return grid
 
 
-class TrapLadder:
-    """A ladder of moves-only chains at trap angles 2 pi ``turns`` (rad).
+class ExchangeLadder:
+    """Replica exchange between rungs of one chain of moves-only samplers: the part shared
+    by :class:`TrapLadder` (rungs at trap angles, mapped swaps) and :class:`ForceLadder`
+    (rungs at pulling forces, plain swaps). Subclasses say how a rung's energy is set
+    (:meth:`set_rung`) and what a swap proposes (:meth:`proposal`).
 
-    Parameters
-    ----------
-    moves : dnabraid.run.twist_moves.PlectonemeMoves
-        The moves (and, through ``moves.energy``, the energy) shared by every rung.
-    chain, sides, orientation
-        The strand's beads, the side particle of each bond and the bead's orientation
-        particle.
-    turns : sequence of float
-        The rungs' trap angles in turns, increasing.
-    kT : float
-        pN nm.
-    seed : int
-        Seed of the swaps' acceptance draws.
-    """
+    A swap of rungs k, k + 1 proposes (y_k, y_k+1) from (x_k, x_k+1) by an involution
+    (applied twice it gives the states back) and accepts it with probability
 
-    def __init__(self, moves, chain, sides, orientation, turns, kT: float, seed: int):
+        min(1, J exp(-[U_k(y_k) - U_k(x_k) + U_k+1(y_k+1) - U_k+1(x_k+1)] / kT)),
+
+    J the involution's Jacobian (1 for both ladders here): detailed balance for the
+    product of the rungs' Boltzmann distributions. Round trips count a state carried from
+    the lowest rung to the highest and back."""
+
+    def __init__(self, moves, n_rungs: int, kT: float, seed: int):
         self.moves = moves
-        self.chain = np.asarray(chain, np.int64)
-        self.sides = np.asarray(sides, np.int64)
-        self.orientation = int(orientation)
-        self.turns = [float(x) for x in turns]
-        if any(b <= a for a, b in zip(self.turns, self.turns[1:])):
-            raise ValueError("ladder turns must increase")
-        self.thetas = [2 * math.pi * x for x in self.turns]
         self.kT = float(kT)
         self.rng = np.random.default_rng([int(seed), 7])
-        K = len(self.turns)
+        K = int(n_rungs)
         self.pos: list = [None] * K
         self.who = list(range(K))  # the state id on each rung
         self._up: list = [None] * K  # per state: True once it touched rung 0, False after top
         self.round_trips = 0
         self.tries = np.zeros(max(K - 1, 0), np.int64)
         self.accepted = np.zeros(max(K - 1, 0), np.int64)
+        self.refused = np.zeros(max(K - 1, 0), np.int64)  # proposals refused before energy
         self.rounds = 0
         self.trace: list = []  # ``who`` after each round (the states' walks over the rungs)
 
-    def set_angle(self, theta: float) -> None:
-        self.moves.energy.set_trap_angle(theta)
+    def set_rung(self, k: int) -> None:
+        """Make the moves' energy rung k's."""
+        raise NotImplementedError
+
+    def proposal(self, k: int):
+        """(y_k, y_k+1) proposed from the states on rungs k, k + 1, or None when refused
+        (a constraint the states must keep)."""
+        raise NotImplementedError
 
     def run_rung(self, k: int, n_moves: int) -> None:
-        """``n_moves`` moves of rung k at its angle."""
-        self.set_angle(self.thetas[k])
+        """``n_moves`` moves of rung k at its own energy."""
+        self.set_rung(k)
         self.pos[k], _ = self.moves.run(self.pos[k], n_moves)
 
     def swap(self, k: int) -> bool:
-        """One mapped swap attempt between rungs k and k + 1; True when accepted."""
+        """One swap attempt between rungs k and k + 1; True when accepted."""
         e = self.moves.energy
         xi, xj = self.pos[k], self.pos[k + 1]
-        d = self.thetas[k + 1] - self.thetas[k]
-        yi = swap_map(xj, self.chain, self.sides, self.orientation, -d)
-        yj = swap_map(xi, self.chain, self.sides, self.orientation, d)
-        self.set_angle(self.thetas[k])
-        du = e.total(yi) - e.total(xi)
-        self.set_angle(self.thetas[k + 1])
-        du += e.total(yj) - e.total(xj)
         self.tries[k] += 1
+        prop = self.proposal(k)
+        if prop is None:
+            self.refused[k] += 1
+            return False
+        yi, yj = prop
+        self.set_rung(k)
+        du = e.total(yi) - e.total(xi)
+        self.set_rung(k + 1)
+        du += e.total(yj) - e.total(xj)
         x = du / self.kT
         if x <= 0 or self.rng.random() < math.exp(-x):
             self.accepted[k] += 1
@@ -221,6 +221,86 @@ class TrapLadder:
     def acceptance(self) -> list:
         """Swap acceptance of each neighbour pair (None before the first attempt)."""
         return [int(a) / int(t) if t else None for a, t in zip(self.accepted, self.tries)]
+
+
+class TrapLadder(ExchangeLadder):
+    """A ladder of moves-only chains at trap angles 2 pi ``turns`` (rad), neighbours
+    swapped through :func:`swap_map` (the bead's turn spread over the frames).
+
+    Parameters
+    ----------
+    moves : dnabraid.run.twist_moves.PlectonemeMoves
+        The moves (and, through ``moves.energy``, the energy) shared by every rung.
+    chain, sides, orientation
+        The strand's beads, the side particle of each bond and the bead's orientation
+        particle.
+    turns : sequence of float
+        The rungs' trap angles in turns, increasing.
+    kT : float
+        pN nm.
+    seed : int
+        Seed of the swaps' acceptance draws.
+    """
+
+    def __init__(self, moves, chain, sides, orientation, turns, kT: float, seed: int):
+        self.chain = np.asarray(chain, np.int64)
+        self.sides = np.asarray(sides, np.int64)
+        self.orientation = int(orientation)
+        self.turns = [float(x) for x in turns]
+        if any(b <= a for a, b in zip(self.turns, self.turns[1:])):
+            raise ValueError("ladder turns must increase")
+        self.thetas = [2 * math.pi * x for x in self.turns]
+        super().__init__(moves, len(self.turns), kT, seed)
+
+    def set_angle(self, theta: float) -> None:
+        self.moves.energy.set_trap_angle(theta)
+
+    def set_rung(self, k: int) -> None:
+        self.set_angle(self.thetas[k])
+
+    def proposal(self, k: int):
+        d = self.thetas[k + 1] - self.thetas[k]
+        return (swap_map(self.pos[k + 1], self.chain, self.sides, self.orientation, -d),
+                swap_map(self.pos[k], self.chain, self.sides, self.orientation, d))
+
+
+class ForceLadder(ExchangeLadder):
+    """A ladder of moves-only chains at pulling forces ``forces_pN`` (increasing), one trap
+    angle for all: parallel tempering in the force (Geyer 1991; Hukushima & Nemoto, J.
+    Phys. Soc. Jpn. 65, 1604 (1996), with the force in place of the temperature).
+
+    Every rung holds the same catenation (the trap angle is common and the moves never
+    pass a strand through the other), so a swap exchanges the two states unmapped (J = 1)
+    and only the pull term changes: -ln(acceptance ratio) = (F_k+1 - F_k)(z_k - z_k+1)
+    / kT with z the pulled particles' weighted height. Low (or high) forces, where a
+    buckled braid's loops come and go faster, hand their states to the others
+    (docs/validation.md 2.3s).
+
+    Parameters
+    ----------
+    moves : dnabraid.run.chain_moves.BraidMoves (or any moves on a LocalEnergy with a pull)
+    forces_pN : sequence of float
+        The rungs' forces, increasing, pN.
+    trap_angle_rad : float
+        The common trap angle (2 pi n).
+    kT : float
+        pN nm.
+    seed : int
+    """
+
+    def __init__(self, moves, forces_pN, trap_angle_rad: float, kT: float, seed: int):
+        self.forces = [float(f) for f in forces_pN]
+        if any(b <= a for a, b in zip(self.forces, self.forces[1:])) or min(self.forces) <= 0:
+            raise ValueError("ladder forces must be > 0 and increase")
+        self.trap_angle = float(trap_angle_rad)
+        moves.energy.set_trap_angle(self.trap_angle)
+        super().__init__(moves, len(self.forces), kT, seed)
+
+    def set_rung(self, k: int) -> None:
+        self.moves.energy.set_pull_force(self.forces[k])
+
+    def proposal(self, k: int):
+        return self.pos[k + 1], self.pos[k]
 
 
 @dataclasses.dataclass(frozen=True)
