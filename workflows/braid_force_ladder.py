@@ -25,7 +25,7 @@ split R-hat <= 1.05, ESS >= 100 on extension and torque; the torque identity) an
 buckled state is the slow variable, by the same rule on the axis writhe Wr_ax.
 
 Usage:
-    python workflows/braid_force_ladder.py run --turns 2.5 --forces 0.5 0.7 1 1.4 2 [...]
+    python workflows/braid_force_ladder.py run --turns 2.5 [--forces 0.5 0.8 1.25 2 3 ...]
     python workflows/braid_force_ladder.py report
 Per ladder: <work>/<tag>/ladder_rNN.npz (resumed: finished ladders are not rerun); per run
 workflows/results/braid_force_ladder_<tag>.json; all runs: braid_force_ladder.md.
@@ -68,16 +68,7 @@ def braid_moves(scene, model, n_moves: int):
     LocalEnergy."""
     from dnabraid.run.chain_moves import BraidMoves
 
-    s = scene
-    return BraidMoves.for_model(model, moves_per_call=n_moves,
-                                crank_angle_rad=s.crank_angle_rad,
-                                bead_move_nm=s.bead_move_nm, shear_nm=s.shear_nm,
-                                shear_z_nm=s.shear_z_nm, twist_rad=s.twist_rad,
-                                sway_rad=s.sway_rad, pivot_rad=s.pivot_rad,
-                                tilt_rad=s.tilt_rad, stretch_eps=s.stretch_eps,
-                                breathe_eps=s.breathe_eps,
-                                breathe_max_beads=s.breathe_max_beads,
-                                crank_max_beads=s.crank_max_beads, seed=s.seed)
+    return BraidMoves.for_model(model, moves_per_call=n_moves, **scene.move_settings())
 
 
 def run_ladder(job) -> str:
@@ -289,16 +280,16 @@ def main(argv=None):
     r.add_argument("--length", type=float, default=100.0, help="nm per strand")
     r.add_argument("--turns", type=float, default=2.5, help="catenation (trap turns)")
     r.add_argument("--forces", type=float, nargs="+",
-                   default=[0.5, 0.7, 1.0, 1.4, 2.0, 2.5, 3.0], help="rungs, pN, increasing")
+                   default=[0.5, 0.8, 1.25, 2.0, 3.0], help="rungs, pN, increasing")
     r.add_argument("--salt", type=float, default=150.0, help="mM")
     r.add_argument("--separation", type=float, default=40.0, help="tether separation, nm")
     r.add_argument("--replicas", type=int, default=4, help="independent ladders")
-    r.add_argument("--rounds", type=int, default=2000)
-    r.add_argument("--eq-rounds", type=int, default=200)
-    r.add_argument("--round-moves", type=int, default=3000)
-    r.add_argument("--rung-moves", type=int, default=300_000,
+    r.add_argument("--rounds", type=int, default=6000)
+    r.add_argument("--eq-rounds", type=int, default=300)
+    r.add_argument("--round-moves", type=int, default=2000)
+    r.add_argument("--rung-moves", type=int, default=200_000,
                    help="moves per rung from its built start before the swaps begin")
-    r.add_argument("--frame-every", type=int, default=5, help="rounds between writhe frames")
+    r.add_argument("--frame-every", type=int, default=10, help="rounds between writhe frames")
     r.add_argument("--seed", type=int, default=1)
     r.add_argument("--workers", type=int, default=2)
     r.add_argument("--work", default="runs/braid_force_ladder")

@@ -236,21 +236,24 @@ class Braid(TurnedScene):
         if self.mc_moves > 0:
             # the LocalEnergy is built from the finished System at the first call
             kit.moves = BraidMoves(kit.system, chains, kit.fixed, center, d.kT,
-                                   moves_per_call=self.mc_moves,
-                                   crank_angle_rad=self.crank_angle_rad,
-                                   bead_move_nm=self.bead_move_nm, shear_nm=self.shear_nm,
-                                   shear_z_nm=self.shear_z_nm, twist_rad=self.twist_rad,
-                                   sway_rad=self.sway_rad, pivot_rad=self.pivot_rad,
-                                   tilt_rad=self.tilt_rad, stretch_eps=self.stretch_eps,
-                                   breathe_eps=self.breathe_eps,
-                                   breathe_max_beads=self.breathe_max_beads,
-                                   crank_max_beads=self.crank_max_beads, seed=self.seed,
-                                   mirror=self.mirror == "image")
+                                   moves_per_call=self.mc_moves, **self.move_settings())
         return {"bead_center": center, "zeta_center_pN_ns_per_nm": zeta_center,
                 "zeta_attach_pN_ns_per_nm": d.zeta_bead,
                 "zeta_bead_physical_pN_ns_per_nm": zeta_phys,
                 "wall_k_pN_per_nm": d.wall_k if self.surface else 0.0,
                 "n_exclusions": n_excl}
+
+    def move_settings(self) -> dict:
+        """The scene's move amplitudes, arc lengths, seed and mirror as keyword arguments
+        of :class:`~dnabraid.run.chain_moves.BraidMoves` (all but ``moves_per_call``)."""
+        return {"crank_angle_rad": self.crank_angle_rad, "bead_move_nm": self.bead_move_nm,
+                "shear_nm": self.shear_nm, "shear_z_nm": self.shear_z_nm,
+                "twist_rad": self.twist_rad, "sway_rad": self.sway_rad,
+                "pivot_rad": self.pivot_rad, "tilt_rad": self.tilt_rad,
+                "stretch_eps": self.stretch_eps, "breathe_eps": self.breathe_eps,
+                "breathe_max_beads": self.breathe_max_beads,
+                "crank_max_beads": self.crank_max_beads, "seed": self.seed,
+                "mirror": self.mirror == "image"}
 
     #: every turn value, n = 0 included, gets a built (overdispersed) start of its own
     builds_turned_start: ClassVar[bool] = True
