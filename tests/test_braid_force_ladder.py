@@ -29,3 +29,29 @@ def test_force_ladder_workflow_keeps_the_catenation(tmp_path):
         assert not row["converged"]  # 20 rounds: ESS far below 100
         assert "ESS" in row["reason"]
     assert "| 1 |" in wf.render([res])
+
+
+def _synthetic(turns, forces, alpha, beta):
+    """Rows with torque alpha n F and extension 80 - beta n^2 (+ F): they obey the Maxwell
+    relation dGamma/dF = -(1/2 pi) dz/dn exactly when beta = pi alpha."""
+    rows = [{"force_pN": F, "torque_pN_nm": {"mean": alpha * turns * F, "sem": 0.01},
+             "extension_nm": {"mean": 80 - beta * turns**2 + F, "sem": 0.01}}
+            for F in forces]
+    return {"length_nm": 100.0, "salt_mM": 150.0, "forces_pN": forces, "turns": turns,
+            "rows": rows}
+
+
+def test_maxwell_table_on_rows_that_obey_it_and_rows_that_do_not():
+    """Uneven forces (the three-point derivative must be exact for a torque linear in F)
+    and three catenations (the central difference exact for z quadratic in n): z = 0 to
+    round-off when beta = pi alpha, |z| >> 1 when beta = 2 pi alpha."""
+    wf = load_workflow("braid_force_ladder")
+    forces = [0.5, 0.8, 1.25, 2.0, 3.0]
+    alpha = 6.0
+    good = wf.maxwell_table([_synthetic(n, forces, alpha, np.pi * alpha) for n in (2, 2.5, 3)])
+    zs = [float(line.split("|")[-2]) for line in good.splitlines() if line.startswith("| 2.5")]
+    assert len(zs) == 3 and max(abs(z) for z in zs) < 1e-6, zs
+    bad = wf.maxwell_table([_synthetic(n, forces, alpha, 2 * np.pi * alpha)
+                            for n in (2, 2.5, 3)])
+    zs = [float(line.split("|")[-2]) for line in bad.splitlines() if line.startswith("| 2.5")]
+    assert min(abs(z) for z in zs) > 100, zs

@@ -28,7 +28,7 @@ Usage:
     python workflows/braid_force_ladder.py run --turns 2.5 [--forces 0.5 0.8 1.25 2 3 ...]
     python workflows/braid_force_ladder.py report
 Per ladder: <work>/<tag>/ladder_rNN.npz (resumed: finished ladders are not rerun); per run
-workflows/results/braid_force_ladder_<tag>.json; all runs: braid_force_ladder.md.
+workflows/results/braid_force_ladder_<tag>.json; all runs: braid_force_ladder.{md,png}.
 """
 
 from __future__ import annotations
@@ -262,14 +262,93 @@ def render(results: list[dict]) -> str:
     return "\n".join(lines)
 
 
+def maxwell_table(results: list[dict]) -> str:
+    """The Maxwell relation dGamma/dF = -(1/2 pi) dz/dn (Mosconi et al. 2009, Eq. 2) where
+    runs at three or more evenly spaced catenations share their forces: at each inner
+    catenation and inner force, dGamma/dF by the three-point derivative over the rungs
+    (uneven spacing) and dz/dn by the central difference over the catenations. Errors add
+    in quadrature as if independent; neighbouring rungs of one ladder are positively
+    correlated through the swaps, which makes the true error of a difference smaller, so
+    |z| is, if anything, understated."""
+    by = {}
+    for r in results:
+        by.setdefault((r["length_nm"], r["salt_mM"], tuple(r["forces_pN"])), {})[r["turns"]] = r
+    lines = []
+    for (L, salt, forces), runs in by.items():
+        ns = sorted(runs)
+        if len(ns) < 3 or len(forces) < 3:
+            continue
+        lines += [f"### Maxwell relation, 2 x {L:g} nm, {salt:g} mM", "",
+                  "| n | F (pN) | dGamma/dF (nm) | -(1/2 pi) dz/dn (nm) | z |",
+                  "|---|---|---|---|---|"]
+        for i in range(1, len(ns) - 1):
+            n0, n1, n2 = ns[i - 1], ns[i], ns[i + 1]
+            for k in range(1, len(forces) - 1):
+                f0, f1, f2 = forces[k - 1], forces[k], forces[k + 1]
+                g = [runs[n1]["rows"][j]["torque_pN_nm"] for j in (k - 1, k, k + 1)]
+                # three-point derivative at f1 on an uneven grid
+                h1, h2 = f1 - f0, f2 - f1
+                c = (-h2 / (h1 * (h1 + h2)), (h2 - h1) / (h1 * h2), h1 / (h2 * (h1 + h2)))
+                dg = sum(ci * gi["mean"] for ci, gi in zip(c, g))
+                edg = math.sqrt(sum((ci * gi["sem"]) ** 2 for ci, gi in zip(c, g)))
+                za, zb = (runs[m]["rows"][k]["extension_nm"] for m in (n0, n2))
+                dz = -(zb["mean"] - za["mean"]) / (n2 - n0) / (2 * math.pi)
+                edz = math.hypot(za["sem"], zb["sem"]) / (n2 - n0) / (2 * math.pi)
+                zsc = (dg - dz) / math.hypot(edg, edz)
+                lines.append(f"| {n1:g} | {f1:g} | {dg:.2f} +- {edg:.2f} | "
+                             f"{dz:.2f} +- {edz:.2f} | {zsc:+.2f} |")
+        lines.append("")
+    return "\n".join(lines)
+
+
 def cmd_report(a) -> None:
     results = [json.loads(p.read_text())
                for p in sorted(RESULTS.glob("braid_force_ladder_*.json"))]
-    text = render(results)
+    results.sort(key=lambda r: r["turns"])
+    text = render(results) + "\n" + maxwell_table(results)
     if a.reading:
         text += "\n" + pathlib.Path(a.reading).read_text()
     (RESULTS / "braid_force_ladder.md").write_text(text + "\n")
+    plot(results, RESULTS / "braid_force_ladder.png")
     print(text)
+
+
+def plot(results, path) -> None:
+    """Extension against force per catenation (open marks: NOT CONVERGED) and the axis
+    writhe of each ladder (dots) with the mean across ladders."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(10, 4))
+    for i, res in enumerate(results):
+        c = f"C{i}"
+        rows = res["rows"]
+        F = np.array([r["force_pN"] for r in rows])
+        z = np.array([r["extension_nm"]["mean"] for r in rows])
+        ez = np.array([r["extension_nm"]["sem"] for r in rows])
+        ok = np.array([r["converged"] for r in rows])
+        lab = f"n = {res['turns']:g}"
+        ax1.errorbar(F, z, yerr=ez, color=c, ls="-", lw=1, capsize=2, label=lab)
+        ax1.plot(F[ok], z[ok], "o", color=c)
+        ax1.plot(F[~ok], z[~ok], "o", mfc="white", color=c)
+        w = np.array([r["wr_axis"]["mean"] for r in rows])
+        ax2.plot(F, w, "-", color=c, label=lab)
+        for f, r in zip(F, rows):
+            m = r["wr_axis"].get("replica_means") or []
+            ax2.plot([f] * len(m), m, ".", color=c, alpha=0.6)
+    ax1.set_xlabel("force (pN)")
+    ax1.set_ylabel("extension (nm)")
+    ax1.set_title("open: NOT CONVERGED")
+    ax1.legend()
+    ax2.set_xlabel("force (pN)")
+    ax2.set_ylabel("braid-axis writhe Wr_ax (turns)")
+    ax2.set_title("dots: one ladder each")
+    fig.suptitle(f"2 x {results[0]['length_nm']:g} nm braid, force ladders")
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
 
 
 def main(argv=None):
