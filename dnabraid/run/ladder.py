@@ -36,6 +36,7 @@ are rare on long ladders (docs/validation.md 2.3p).
 
 from __future__ import annotations
 
+import abc
 import contextlib
 import dataclasses
 import json
@@ -133,7 +134,7 @@ def rung_turns(turns, per_turn: int) -> list[float]:
     return grid
 
 
-class ExchangeLadder:
+class ExchangeLadder(abc.ABC):
     """Replica exchange between rungs of one chain of moves-only samplers: the part shared
     by :class:`TrapLadder` (rungs at trap angles, mapped swaps) and :class:`ForceLadder`
     (rungs at pulling forces, plain swaps). Subclasses say how a rung's energy is set
@@ -163,14 +164,14 @@ class ExchangeLadder:
         self.rounds = 0
         self.trace: list = []  # ``who`` after each round (the states' walks over the rungs)
 
+    @abc.abstractmethod
     def set_rung(self, k: int) -> None:
         """Make the moves' energy rung k's."""
-        raise NotImplementedError
 
+    @abc.abstractmethod
     def proposal(self, k: int):
         """(y_k, y_k+1) proposed from the states on rungs k, k + 1, or None when refused
         (a constraint the states must keep)."""
-        raise NotImplementedError
 
     def run_rung(self, k: int, n_moves: int) -> None:
         """``n_moves`` moves of rung k at its own energy."""
