@@ -56,11 +56,14 @@ def tag_of(a) -> str:
 
 
 def base_scene(a, seed: int):
+    """The braid scene of a ladder (its starts, observables, move settings and verdict
+    rule); mc_moves 0: the ladder builds its own moves (:func:`braid_moves`), so the
+    scene's hybrid moves are not built at all."""
     from dnabraid.scenes import make_scene
 
     return make_scene("braid", {"length_nm": a.length, "force_pN": a.forces[0],
                                 "salt_mM": a.salt, "tether_separation_nm": a.separation,
-                                "turns": [a.turns], "seed": seed, "mc_moves": a.round_moves})
+                                "turns": [a.turns], "seed": seed, "mc_moves": 0})
 
 
 def braid_moves(scene, model, n_moves: int):
