@@ -113,6 +113,9 @@ def run_ladder(job) -> str:
     samples = {c: np.zeros((K, a.rounds)) for c in cols}
     nf = a.rounds // a.frame_every
     frames = {c: np.zeros((K, nf)) for c in ("wr_axis", "tw_braid", "catenation")}
+    # every rung's positions at the writhe frames (float32, nm): the buckled states
+    # themselves, for inspection (a 2 x 100 nm ladder of 5 rungs: ~2 MB)
+    pos_frames = np.zeros((K, nf) + np.shape(lad.pos[0]), np.float32)
     b1, b2 = model.chains
     acc0, try0 = lad.accepted.copy(), lad.tries.copy()
     trips0 = lad.round_trips
@@ -130,13 +133,14 @@ def run_ladder(job) -> str:
                 frames["wr_axis"][k, j] = wr
                 frames["catenation"][k, j] = ca
                 frames["tw_braid"][k, j] = ca - wr
+                pos_frames[k, j] = lad.pos[k]
         if (i + 1) % max(1, a.rounds // 10) == 0:  # progress: every tenth of the rounds
             print(f"    ladder {r}: {i + 1}/{a.rounds} rounds, {time.time() - t0:.0f} s, "
                   f"swap acceptance {[round(x, 2) for x in lad.acceptance()]}", flush=True)
     acc = (lad.accepted - acc0) / np.maximum(lad.tries - try0, 1)
     out = {f"s_{c}": x for c, x in samples.items()}
     out.update({f"f_{c}": x for c, x in frames.items()})
-    out.update(forces=np.array(a.forces), swap_acceptance=acc,
+    out.update(positions=pos_frames, forces=np.array(a.forces), swap_acceptance=acc,
                round_trips=np.array(lad.round_trips - trips0),
                who=np.asarray(lad.trace[-a.rounds:], np.int16),
                wall_s=np.array(time.time() - t0))

@@ -98,6 +98,34 @@ def moves_summary(dirs) -> dict | None:
     return tot
 
 
+#: Below this acceptance of the Metropolis-adjusted steps the summary warns (the chain
+#: is still exact; it moves by the Metropolis moves alone).
+MALA_LOW_ACCEPTANCE = 0.2
+
+
+def mala_summary(dirs) -> dict | None:
+    """Acceptance of the Metropolis-adjusted Brownian steps (integrator 'mala') of one
+    point, summed over the replicas' ``done.json`` (a packed Context's shared steps counted
+    once per member); None for the other integrators."""
+    acc = tried = 0
+    packed = set()
+    for d in dirs:
+        path = os.path.join(d, "done.json")
+        if not os.path.exists(path):
+            continue
+        with open(path) as fh:
+            m = json.load(fh).get("mala")
+        if m is None:
+            continue
+        acc += int(m["accepted"])
+        tried += int(m["tried"])
+        packed.add(int(m.get("packed", 1)))
+    if not tried:
+        return None
+    return {"accepted": acc, "tried": tried, "acceptance": acc / tried,
+            "replicas_per_context": sorted(packed)}
+
+
 def _settings(scene: ThermalContract, schedule, model) -> RunSettings:
     return RunSettings(report_interval=scene.report_interval,
                        frame_interval=scene.frame_interval,
@@ -253,6 +281,9 @@ def run(scene: ThermalContract, out: str, *, platform: str = "CPU", threads: int
             mv = moves_summary(dirs)
             if mv is not None:
                 pt["rigid_moves"] = mv
+            ma = mala_summary(dirs)
+            if ma is not None:
+                pt["mala"] = ma
             _check_starts(pt, [dict(r["starts"][k], replica=r["replica"]) for r in results])
             points.append(pt)
         need = scene.replicas_needed(points, R)
@@ -293,6 +324,16 @@ def run(scene: ThermalContract, out: str, *, platform: str = "CPU", threads: int
                      "initial state): " + "; ".join(not_built))
     n_part = model.system.getNumParticles()
     notes += packing_notes(sorted({r["pack"] for r in results}))
+    mala = [pt["mala"]["acceptance"] for pt in points if pt.get("mala")]
+    if mala:
+        notes.append(
+            f"Brownian steps Metropolis-adjusted (integrator = mala: Rossky, Doll & Friedman "
+            f"1978; no time-step bias): acceptance {min(mala):.2f}-{max(mala):.2f} over the "
+            "points" + (" (one accept/reject per packed Context)"
+                        if any(len(r["pack"]) > 1 for r in results) else ""))
+        if min(mala) < MALA_LOW_ACCEPTANCE:
+            notes.append(f"mala acceptance below {MALA_LOW_ACCEPTANCE}: the Brownian steps "
+                         "hardly move; lower timestep_safety (or pack = 1)")
     if plan is not None:
         rates = [x for x in lad["swap_acceptance"] if x is not None]
         notes.append(

@@ -47,7 +47,7 @@ def integrator_seed(seed: int) -> int:
 KB_KJ_PER_MOL_K = 0.0083144626181532
 
 #: Brownian integrators a scene may choose.
-INTEGRATORS = ("euler", "lm")
+INTEGRATORS = ("euler", "lm", "mala")
 
 
 def euler_maruyama_integrator(temperature_K: float, dt_ps: float, masses_amu,
@@ -111,6 +111,75 @@ def leimkuhler_matthews_integrator(temperature_K: float, dt_ps: float, masses_am
     integ.addConstrainPositions()
     integ.addComputePerDof("xi_old", "xi")
     _set_mobility_and_sign(integ, masses_amu, gamma_per_ps, noise_sign)
+    return integ
+
+
+def mala_integrator(temperature_K: float, dt_ps: float, masses_amu,
+                    gamma_per_ps: float = 1.0,
+                    noise_sign=(1.0, 1.0, 1.0)) -> openmm.CustomIntegrator:
+    """Metropolis-adjusted Brownian dynamics (a ``CustomIntegrator``): no time-step bias.
+
+    Each step proposes the Euler-Maruyama step y = x + dt mu F(x) + sqrt(2 kT mu dt) s xi
+    (mu = 1 / (m gamma) per particle, as OpenMM's ``BrownianIntegrator``) and accepts it
+    with probability min(1, exp(-(U(y) - U(x)) / kT) q(x | y) / q(y | x)), where
+    q(y | x) ~ exp(-|y - x - dt mu F(x)|^2 / (4 kT mu dt)) is the proposal's Gaussian
+    density (per degree of freedom, with its own mu); otherwise x is kept. This is
+    Rossky, Doll & Friedman's "smart Monte Carlo" (J. Chem. Phys. 69, 4628 (1978),
+    Eqs. 6-10), known in statistics as MALA (Roberts & Tweedie, Bernoulli 2, 341 (1996)):
+    the chain is reversible with respect to exp(-U / kT) for every dt, so equilibrium
+    averages carry no time-step bias at all; dt sets only the acceptance and how fast the
+    chain moves. Immobile (massless) particles do not move and do not enter q. A proposal
+    whose energy is not finite (a blow-up) is rejected.
+
+    The acceptance ratio needs the total energy at both points: one force-and-energy
+    evaluation per step at the proposal (the current point's energy and forces are kept
+    from the last accepted step; ``stale`` = 1, set by :meth:`Engine.positions_changed`,
+    makes the next step recompute them after positions or parameters were changed from
+    outside; positions set from outside are detected in the step itself). Counters ``n_try`` / ``n_acc`` give the acceptance. All replicas of a
+    packed Context share one accept/reject (the joint chain is exact; its acceptance is
+    the product of the replicas'). Constraints are not allowed (the proposal density
+    would need the constraint manifold's).
+    """
+    integ = openmm.CustomIntegrator(dt_ps)
+    kT = KB_KJ_PER_MOL_K * float(temperature_K)
+    integ.addGlobalVariable("kT", kT)
+    for g in ("E0", "E1", "lnfwd", "lnrev", "acc", "n_try", "n_acc"):
+        integ.addGlobalVariable(g, 0.0)
+    integ.addGlobalVariable("stale", 1.0)
+    integ.addPerDofVariable("mob", 0.0)
+    integ.addPerDofVariable("imob", 0.0)  # 1 / mob, 0 for immobile dofs
+    integ.addPerDofVariable("sgn", 1.0)
+    integ.addPerDofVariable("x0", 0.0)
+    integ.addPerDofVariable("fk", 0.0)
+    integ.addPerDofVariable("xi", 0.0)
+    integ.addPerDofVariable("xe", 0.0)  # positions at the end of the last step
+    integ.addGlobalVariable("moved", 0.0)
+    integ.addUpdateContextState()
+    # positions set from outside since the last step (Metropolis moves, a new state) make
+    # the kept energy and forces stale without any call: detected here
+    integ.addComputeSum("moved", "(x - xe)^2")
+    integ.beginIfBlock("stale + moved > 0")
+    integ.addComputeGlobal("E0", "energy")
+    integ.addComputePerDof("fk", "f")
+    integ.addComputeGlobal("stale", "0")
+    integ.endBlock()
+    integ.addComputePerDof("x0", "x")
+    integ.addComputePerDof("xi", "gaussian")
+    integ.addComputePerDof("x", "x0 + dt*mob*fk + sqrt(2*kT*mob*dt)*sgn*xi")
+    integ.addComputeGlobal("E1", "energy")
+    integ.addComputeSum("lnfwd", "0.5*xi*xi*mob*imob")
+    integ.addComputeSum("lnrev", "(x0 - x - dt*mob*f)^2*imob/(4*kT*dt)")
+    # step(NaN) = 0: a proposal with a non-finite energy is rejected
+    integ.addComputeGlobal("acc", "step(exp(-(E1 - E0)/kT + lnfwd - lnrev) - uniform)")
+    integ.addComputeGlobal("n_try", "n_try + 1")
+    integ.addComputeGlobal("n_acc", "n_acc + acc")
+    integ.addComputePerDof("fk", "select(acc, f, fk)")
+    integ.addComputeGlobal("E0", "select(acc, E1, E0)")
+    integ.addComputePerDof("x", "select(acc, x, x0)")
+    integ.addComputePerDof("xe", "x")
+    _set_mobility_and_sign(integ, masses_amu, gamma_per_ps, noise_sign)
+    imob = [openmm.Vec3(*(3 * [0.0 if m == 0 else m * gamma_per_ps])) for m in masses_amu]
+    integ.setPerDofVariableByName("imob", imob)
     return integ
 
 
@@ -261,8 +330,11 @@ class Engine:
             sysm = self.system
             masses = [sysm.getParticleMass(i).value_in_unit(u.dalton)
                       for i in range(sysm.getNumParticles())]
-            make = (euler_maruyama_integrator if self.integrator_name == "euler"
-                    else leimkuhler_matthews_integrator)
+            if self.integrator_name == "mala" and sysm.getNumConstraints():
+                raise UserError("integrator 'mala' cannot run a system with constraints "
+                                f"({sysm.getNumConstraints()}): use stretch = 'bonds'")
+            make = {"euler": euler_maruyama_integrator, "lm": leimkuhler_matthews_integrator,
+                    "mala": mala_integrator}[self.integrator_name]
             integ = make(self._temperature_K, dt_ps, masses, GAMMA_PER_PS,
                          noise_sign=self.noise_sign or (1.0, 1.0, 1.0))
         integ.setRandomNumberSeed(int(openmm_seed))
@@ -302,6 +374,7 @@ class Engine:
         self.context.setPositions(st.getPositions())
         for k, v in st.getParameters().items():
             self.context.setParameter(k, v)
+        self.positions_changed()
         self.step = int(step)
 
     # -- state ---------------------------------------------------------------
@@ -311,6 +384,22 @@ class Engine:
 
     def set_positions(self, pos_nm) -> None:
         self.context.setPositions(np.asarray(pos_nm) * u.nanometer)
+        self.positions_changed()
+
+    def positions_changed(self) -> None:
+        """Tell a Metropolis-adjusted integrator ('mala') that the positions or parameters
+        were changed from outside, so that it recomputes the current energy and forces
+        (no effect for the other integrators)."""
+        if self.integrator_name == "mala":
+            self.integrator.setGlobalVariableByName("stale", 1.0)
+
+    def mala_acceptance(self) -> tuple[int, int] | None:
+        """(accepted, tried) steps of the 'mala' integrator since its Context was made;
+        None for the other integrators."""
+        if self.integrator_name != "mala":
+            return None
+        g = self.integrator.getGlobalVariableByName
+        return int(round(g("n_acc"))), int(round(g("n_try")))
 
     def parameters(self) -> dict:
         """The Context's global parameters now (name -> value, OpenMM units)."""
@@ -330,6 +419,7 @@ class Engine:
 
     def set_parameter(self, name: str, value: float) -> None:
         self.context.setParameter(name, float(value))
+        self.positions_changed()
 
     def energy_pN_nm(self, groups=None) -> float:
         kw = {"getEnergy": True}
@@ -349,6 +439,7 @@ class Engine:
         """Local energy minimisation (immobile tethers stay put)."""
         openmm.LocalEnergyMinimizer.minimize(
             self.context, units.force_to_openmm(tolerance_pN), max_iterations)
+        self.positions_changed()
 
     def save_checkpoint(self, path: str) -> str:
         """Write the full state (positions, parameters, random-number state) and the step
@@ -367,6 +458,7 @@ class Engine:
             raw = fh.read()
         self.step = int.from_bytes(raw[:8], "little")
         self.context.loadCheckpoint(raw[8:])
+        self.positions_changed()
 
     # -- dynamics ------------------------------------------------------------
     def advance(self, nsteps: int, fail_dir: str | None = None) -> np.ndarray:

@@ -217,6 +217,7 @@ def _run_members(engine, schedule, members, settings, ckdir, chk_path, *, progre
                 mv.restart(seg.index)
         # the movers' statistics run on over the points; each point records its own share
         moves_before = [mv.summary() if mv is not None else None for mv in movers]
+        mala_before = engine.mala_acceptance()
 
         def advance(n, fail_dir, has_moves=has_moves):
             pos = engine.advance(n, fail_dir)
@@ -286,9 +287,16 @@ def _run_members(engine, schedule, members, settings, ckdir, chk_path, *, progre
             if mv is not None:
                 rundir.atomic_write_text(os.path.join(p, "moves.json"),
                                          json.dumps(moves_since(mv.summary(), b)) + "\n")
+        done = {"turns": seg.turns, "step": engine.step}
+        mala = engine.mala_acceptance()
+        if mala is not None:
+            # the Metropolis-adjusted steps of this point (ramp, equilibration, sampling);
+            # packed members share them (one accept/reject for the whole Context)
+            done["mala"] = {"accepted": mala[0] - mala_before[0],
+                            "tried": mala[1] - mala_before[1], "packed": len(members)}
         for p, w in zip(pdirs, ws):
             rundir.atomic_write_text(os.path.join(p, "done.json"), json.dumps(
-                {"turns": seg.turns, "step": engine.step, "frames": w.n_frames}) + "\n")
+                dict(done, frames=w.n_frames)) + "\n")
     return dirs
 
 

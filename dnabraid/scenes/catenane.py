@@ -353,7 +353,8 @@ class Catenane(ThermalScene):
                                  "stiffness)")
     integrator: str = key("lm", "", "'lm' (Leimkuhler-Matthews: per-joint twist variance "
                           "within 1 % of b/C at the default step) or 'euler' (Euler-Maruyama: "
-                          "+2 to +11 % measured)")
+                          "+2 to +11 % measured) or 'mala' (Metropolis-adjusted steps: "
+                          "no time-step bias at any step)")
 
     state_widths: ClassVar[dict] = {"delta_lk": 9, "alpha_pN": 9}
 

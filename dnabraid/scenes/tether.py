@@ -66,7 +66,8 @@ class Tether(TweezerScene):
                           "2) against the independent reference 256.96 +- 0.08 nm, a "
                           "time-step bias of +0.2 nm (2-3 SE: its stiff bonds' variance "
                           "inflated by 1/(1 - h/2)); LM read 256.91 +- 0.16 and 256.93 +- "
-                          "0.12 nm (2026-12-02)")
+                          "0.12 nm (2026-12-02)); 'mala' (Metropolis-adjusted steps, no "
+                          "time-step bias at any step)")
     mc_moves: int = key(MC_MOVES, "", MC_MOVES_HELP)
     crank_angle_rad: float = key(2.0, "rad", CRANK_HELP)
     pivot_angle_rad: float = key(0.6, "rad", PIVOT_HELP)

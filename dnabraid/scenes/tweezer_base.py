@@ -99,7 +99,10 @@ class TweezerScene(ThermalScene):
     pack: int = key(0, "", PACK_HELP)
     integrator: str = key("euler", "", "'euler': Euler-Maruyama (OpenMM BrownianIntegrator); "
                           "'lm': Leimkuhler-Matthews, same cost per step, smaller time-step "
-                          "bias (workflows/results/integrator_bias.md)")
+                          "bias (workflows/results/integrator_bias.md); 'mala': each Euler-Maruyama step "
+                          "accepted by Metropolis on the total energy (Rossky, Doll & Friedman "
+                          "1978): no time-step bias at any step, about twice the cost per "
+                          "step; acceptance in summary.json (lower timestep_safety to raise it)")
 
     #: The trap's global parameter (None: the bead is not turned).
     trap_parameter: ClassVar[str | None] = None
