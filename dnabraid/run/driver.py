@@ -55,7 +55,12 @@ def replica_groups(scene: ThermalContract, replicas, workers: int, platform: str
     when the model cannot be packed (a force that cannot be copied, unless the model says
     how to rebuild it over all copies, as the chiral term does)."""
     can = packable(model.system, model.rebuild_forces)[0]
-    return group_replicas(replicas, scene.pack, workers, platform, can)
+    pack = scene.pack
+    if pack == 0 and getattr(scene, "integrator", None) == "mala":
+        # Metropolis-adjusted steps accept or reject a whole Context: packed replicas would
+        # multiply their acceptances, so by default each runs alone
+        pack = 1
+    return group_replicas(replicas, pack, workers, platform, can)
 
 
 def packing_notes(groups) -> list[str]:

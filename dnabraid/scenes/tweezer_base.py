@@ -37,8 +37,8 @@ IDENTITY_P = 1e-3
 PACK_HELP = ("replicas packed into one OpenMM Context (one System of non-interacting copies, "
              "dnabraid.run.packing; the chiral term is built over all copies, mirror pairs pack "
              "along x). 2 x 60 nm braid: 1.8x faster at 2, 2.9x at 4, 4.2x at 8 "
-             "(workflows/results/benchmark_replicas_small.txt). 0 = replicas / workers, "
-             "1 = off")
+             "(workflows/results/benchmark_replicas_small.txt). 0 = replicas / workers "
+             "(1 with integrator = mala, whose accept/reject is per Context), 1 = off")
 
 
 def _default_turns():
