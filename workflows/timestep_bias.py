@@ -22,6 +22,14 @@ run), ``bias exceeds the bound`` (|bias| - 2 SE(bias) > SE_run / 3) or ``undecid
     python workflows/timestep_bias.py braid --reference workflows/results/default_seeds.json \
         --seeds 11 12
 
+With ``--mala SAFETY`` the comparison runs are instead Metropolis-adjusted
+(``integrator = mala`` at ``timestep_safety = SAFETY``), which have no time-step bias at
+all: bias = m(default) - m(mala) is then the default's whole bias, not a first-order
+estimate of it.
+
+    python workflows/timestep_bias.py braid --reference workflows/results/default_seeds.json \
+        --mala 0.3 --seeds 21 22 --out workflows/results/timestep_bias_braid_mala.md
+
 Writes ``workflows/results/timestep_bias_<scene>.md`` (or ``--out``) and keeps the two run
 directories (``--runs``, resumed when run again).
 """
@@ -118,26 +126,33 @@ def compare_pooled(summaries: list[dict], ref: dict) -> list[dict]:
     return rows
 
 
-def write_pooled(rows, summaries, safety, path: pathlib.Path, cmd: str) -> None:
+def write_pooled(rows, summaries, safety, path: pathlib.Path, cmd: str,
+                 mala: bool = False) -> None:
     conv = sum(p["converged"] for s in summaries for p in s["points"])
     npts = sum(len(s["points"]) for s in summaries)
     walls = [s["wall_time_s"] for s in summaries]
     z2 = float(sum(r["z"] ** 2 for r in rows))
+    what = (f"the default scene with Metropolis-adjusted steps (integrator = mala, no "
+            f"time-step bias at any step; acceptance {_mala_range(summaries)}) at "
+            f"timestep_safety = {safety:g}" if mala else
+            f"the default scene at timestep_safety = {safety:g} (the default is "
+            f"{2 * safety:g})")
+    other = "mala" if mala else "half step"
     lines = [f"# Time-step bias of the default braid ({time.strftime('%Y-%m-%d %H:%M')})", "",
-             f"`{cmd}`: the default scene at timestep_safety = {safety:g} (the default is "
-             f"{2 * safety:g}) for seeds {[s['seed'] for s in summaries]}, "
+             f"`{cmd}`: {what} for seeds {[s['seed'] for s in summaries]}, "
              f"{summaries[0]['points'][0]['extension_nm'].get('n_replicas')} replicas each, "
              f"wall {min(walls):.0f}-{max(walls):.0f} s per run; {conv} of {npts} points "
              "converged. Compared with the pooled six seeds of the default "
              "(`default_seeds.json`; its error the larger of the pooled SEM and rms SEM / "
-             "sqrt(6)); the half-step runs weighted equally. bias = m(default step) - "
-             "m(half step); SE_run = the rms SEM "
-             "of one default run; the bound is SE_run / 3 (issue 21, item 4). Euler-Maruyama "
-             "is first order, so the true bias at the default step may be up to twice the "
-             "measured difference.", "",
+             f"sqrt(6)); the {other} runs weighted equally. bias = m(default step) - "
+             f"m({other}); SE_run = the rms SEM "
+             "of one default run; the bound is SE_run / 3 (issue 21, item 4). "
+             + ("The mala runs are unbiased, so the difference is the default's whole bias."
+                if mala else "Euler-Maruyama is first order, so the true bias at the default "
+                "step may be up to twice the measured difference."), "",
              f"Sum of z^2 over the {len(rows)} rows: {z2:.1f} (rows are independent "
              "between points, not between the two observables of a point).", "",
-             "| observable | turns | default (6 seeds) | half step | bias | SE(bias) | z "
+             f"| observable | turns | default (6 seeds) | {other} | bias | SE(bias) | z "
              "| SE_run / 3 | verdict |",
              "|---|---|---|---|---|---|---|---|---|"]
     for r in rows:
@@ -147,8 +162,13 @@ def write_pooled(rows, summaries, safety, path: pathlib.Path, cmd: str) -> None:
                      f"{r['bound']:.3f} | {r['verdict']} |")
     path.with_suffix(".md").write_text("\n".join(lines) + "\n")
     path.with_suffix(".json").write_text(json.dumps(
-        {"safety": safety, "seeds": [s["seed"] for s in summaries], "walls": walls,
+        {"safety": safety, "integrator": "mala" if mala else None, "seeds": [s["seed"] for s in summaries], "walls": walls,
          "n_converged": conv, "n_points": npts, "sum_z2": z2, "rows": rows}, indent=1))
+
+
+def _mala_range(summaries) -> str:
+    acc = [p["mala"]["acceptance"] for s in summaries for p in s["points"] if p.get("mala")]
+    return f"{min(acc):.2f}-{max(acc):.2f}" if acc else "-"
 
 
 def main(argv=None):
@@ -162,6 +182,9 @@ def main(argv=None):
                     help="a stored seed study of the default (default_seeds.json)")
     ap.add_argument("--seeds", type=int, nargs="*", default=[11, 12],
                     help="seeds of the half-step runs (with --reference)")
+    ap.add_argument("--mala", type=float, default=None, metavar="SAFETY",
+                    help="with --reference: compare with Metropolis-adjusted runs "
+                         "(integrator = mala) at this timestep_safety instead of half steps")
     a = ap.parse_args(argv)
     over = {k: parse_value(v) for k, v in (x.split("=", 1) for x in a.set)}
     s = make_scene(a.scene, over)
@@ -209,18 +232,22 @@ def main(argv=None):
 def pooled_main(a, over, s):
     """Half-step runs of several seeds against a stored seed study of the default."""
     runs = a.runs or os.path.join(HERE, "results", f"timestep_bias_{a.scene}_runs")
-    safety = s.timestep_safety / 2
+    mala = a.mala is not None
+    safety = a.mala if mala else s.timestep_safety / 2
+    extra = {"integrator": "mala"} if mala else {}
     summaries = []
     for seed in a.seeds:
-        print(f"seed {seed}: timestep_safety {safety:g}", flush=True)
-        sc = make_scene(a.scene, {**over, "timestep_safety": safety, "seed": seed})
-        summaries.append(sc.run(os.path.join(runs, f"half_s{seed}")))
+        print(f"seed {seed}: timestep_safety {safety:g} {extra}", flush=True)
+        sc = make_scene(a.scene, {**over, **extra, "timestep_safety": safety, "seed": seed})
+        name = f"mala{safety:g}_s{seed}" if mala else f"half_s{seed}"
+        summaries.append(sc.run(os.path.join(runs, name)))
     ref = json.loads(pathlib.Path(a.reference).read_text())
     rows = compare_pooled(summaries, ref)
     out = a.out or os.path.join(HERE, "results", f"timestep_bias_{a.scene}.md")
     cmd = (f"python workflows/timestep_bias.py {a.scene} --reference "
-           f"{os.path.relpath(a.reference)} --seeds {' '.join(map(str, a.seeds))}")
-    write_pooled(rows, summaries, safety, pathlib.Path(out), cmd)
+           f"{os.path.relpath(a.reference)} " + (f"--mala {a.mala:g} " if mala else "")
+           + f"--seeds {' '.join(map(str, a.seeds))}")
+    write_pooled(rows, summaries, safety, pathlib.Path(out), cmd, mala=mala)
     print(pathlib.Path(out).with_suffix(".md").read_text())
     return rows
 

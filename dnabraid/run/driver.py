@@ -56,7 +56,7 @@ def replica_groups(scene: ThermalContract, replicas, workers: int, platform: str
     how to rebuild it over all copies, as the chiral term does)."""
     can = packable(model.system, model.rebuild_forces)[0]
     pack = scene.pack
-    if pack == 0 and getattr(scene, "integrator", None) == "mala":
+    if pack == 0 and scene.integrator == "mala":
         # Metropolis-adjusted steps accept or reject a whole Context: packed replicas would
         # multiply their acceptances, so by default each runs alone
         pack = 1
