@@ -15,7 +15,9 @@ from dnabraid.run.driver import replica_groups
 from dnabraid.run.packing import PackError, grid_offsets, pack_models, packable, replicate_system
 from dnabraid.scenes import make_scene
 
-BRAID = {"length_nm": 60.0, "force_pN": 10.0, "turns": [1.0]}
+#: packing is about Euler-Maruyama's Contexts: with the braid's default integrator 'mala'
+#: (one accept/reject per Context) pack = 0 means one replica per Context
+BRAID = {"length_nm": 60.0, "force_pN": 10.0, "turns": [1.0], "integrator": "euler"}
 
 
 def _energy_forces(system, pos):
@@ -140,6 +142,10 @@ def test_chiral_and_mirror_scenes_pack():
     assert replica_groups(s, range(5), 2, "CPU", m) == [(0, 1, 2), (3, 4)]
     assert replica_groups(make_scene("braid", dict(BRAID, pack=1)), range(2), 1, "CPU", m) \
         == [(0,), (1,)]
+    mala = make_scene("braid", dict(BRAID, integrator="mala"))
+    assert replica_groups(mala, range(4), 2, "CPU", m) == [(0,), (1,), (2,), (3,)]
+    assert replica_groups(make_scene("braid", dict(BRAID, integrator="mala", pack=2)),
+                          range(4), 2, "CPU", m) == [(0, 1), (2, 3)]
 
 
 def test_packed_tether_is_calibrated_against_the_exact_wlc(tmp_path):

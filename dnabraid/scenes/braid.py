@@ -87,9 +87,18 @@ class Braid(TurnedScene):
                      "equilibration)")
     replicas: int = key(4, "", "independent replicas per turn value, each from its own start "
                         "(seed); the error bar is the scatter of their means (Student t)")
-    timestep_safety: float = key(0.6, "", "time step = safety x 2 / (mobility x largest "
-                                 "stiffness); 0.6: no resolved bias at the default "
-                                 "(docs/validation.md 1.6; workflows/results/integrator_bias.md)")
+    timestep_safety: float = key(0.3, "", "time step = safety x 2 / (mobility x largest "
+                                 "stiffness); with integrator = mala it sets only the "
+                                 "acceptance (0.68 at 0.3, 0.26 at 0.6: "
+                                 "workflows/results/benchmark_mala.txt), not the answer")
+    integrator: str = key("mala", "", "'mala' (the default since 2026-12-07): Euler-Maruyama "
+                          "steps accepted by Metropolis on the total energy (Rossky, Doll & "
+                          "Friedman 1978), no time-step bias at any step, ~2x the cost per "
+                          "step (+17 % wall at the default, the moves dominate); 'euler': "
+                          "Euler-Maruyama (OpenMM's BrownianIntegrator), biased at O(dt) "
+                          "(the earlier default at safety 0.6 read the n = 0 extension "
+                          "0.14 +- 0.07 nm above mala: docs/validation.md 2.4''); 'lm': "
+                          "Leimkuhler-Matthews")
     equilibration_steps: int = key(10000, "steps", "equilibration steps after each change "
                                    "of turns (more is cut from the data where it is detected)")
     trap_stiffness_pN_nm: float = key(2000.0, "pN nm", "rotational trap: U = -K cos(phi - "
