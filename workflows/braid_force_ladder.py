@@ -51,8 +51,10 @@ sys.path.insert(0, str(HERE))
 
 
 def tag_of(a) -> str:
+    # the rung count is part of the tag: two ladders over the same range with different
+    # rungs are different runs (a 9-rung run once "resumed" from 7-rung files)
     return (f"L{a.length:g}_n{a.turns:g}_salt{a.salt:g}_F{a.forces[0]:g}-{a.forces[-1]:g}"
-            f"_seed{a.seed}")
+            f"x{len(a.forces)}_seed{a.seed}")
 
 
 def base_scene(a, seed: int):
@@ -78,6 +80,10 @@ def run_ladder(job) -> str:
     """One ladder (replica r): returns the path of its .npz."""
     a, r, path = job
     if os.path.exists(path):
+        have = np.load(path)["forces"]
+        if len(have) != len(a.forces) or not np.allclose(have, a.forces):
+            raise RuntimeError(f"{path} holds a ladder over {list(have)} pN, not the "
+                               f"requested {list(a.forces)}: remove it or use --work")
         return path
     from braid_buckling import split_catenation
 
