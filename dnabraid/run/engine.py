@@ -135,10 +135,11 @@ def mala_integrator(temperature_K: float, dt_ps: float, masses_amu,
     evaluation per step at the proposal (the current point's energy and forces are kept
     from the last accepted step; ``stale`` = 1, set by :meth:`Engine.positions_changed`,
     makes the next step recompute them after positions or parameters were changed from
-    outside; positions set from outside are detected in the step itself). Counters ``n_try`` / ``n_acc`` give the acceptance. All replicas of a
-    packed Context share one accept/reject (the joint chain is exact; its acceptance is
-    the product of the replicas'). Constraints are not allowed (the proposal density
-    would need the constraint manifold's).
+    outside; positions set from outside are detected in the step itself). Counters
+    ``n_try`` / ``n_acc`` give the acceptance. All replicas of a packed Context share one
+    accept/reject (the joint chain is exact; its acceptance is the product of the
+    replicas'). Constraints are not allowed (the proposal density would need the
+    constraint manifold's).
     """
     integ = openmm.CustomIntegrator(dt_ps)
     kT = KB_KJ_PER_MOL_K * float(temperature_K)
