@@ -162,7 +162,8 @@ def write_pooled(rows, summaries, safety, path: pathlib.Path, cmd: str,
                      f"{r['bound']:.3f} | {r['verdict']} |")
     path.with_suffix(".md").write_text("\n".join(lines) + "\n")
     path.with_suffix(".json").write_text(json.dumps(
-        {"safety": safety, "integrator": "mala" if mala else None, "seeds": [s["seed"] for s in summaries], "walls": walls,
+        {"safety": safety, "integrator": "mala" if mala else None,
+         "seeds": [s["seed"] for s in summaries], "walls": walls,
          "n_converged": conv, "n_points": npts, "sum_z2": z2, "rows": rows}, indent=1))
 
 

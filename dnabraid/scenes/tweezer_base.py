@@ -99,8 +99,8 @@ class TweezerScene(ThermalScene):
     pack: int = key(0, "", PACK_HELP)
     integrator: str = key("euler", "", "'euler': Euler-Maruyama (OpenMM BrownianIntegrator); "
                           "'lm': Leimkuhler-Matthews, same cost per step, smaller time-step "
-                          "bias (workflows/results/integrator_bias.md); 'mala': each Euler-Maruyama step "
-                          "accepted by Metropolis on the total energy (Rossky, Doll & Friedman "
+                          "bias (workflows/results/integrator_bias.md); 'mala': each "
+                          "Euler-Maruyama step accepted by Metropolis on the total energy (Rossky, Doll & Friedman "
                           "1978): no time-step bias at any step, about twice the cost per "
                           "step; acceptance in summary.json (lower timestep_safety to raise it)")
 
