@@ -100,8 +100,12 @@ def test_room_temperature_asymmetry_across_seeds(tmp_path):
                       "replicas": 1, "protocol": "ramp",
                       # pinned: measured with Brownian dynamics alone in the stiff trap,
                       # the braid's defaults until 2026-12-05 (with the new default's
-                      # moves this sweep ran > 30 min instead of 6-10)
-                      "mc_moves": 0, "trap_stiffness_pN_nm": 20000.0},
+                      # moves this sweep ran > 30 min instead of 6-10), by Euler-Maruyama
+                      # (the default until 2026-12-07: with mala's rejections this sweep
+                      # ran 19 min and its seeds scattered 1.6x more, se 13.1 pN nm at
+                      # alpha = 0, and the alpha = 12 contrast fell to 2.6 SE)
+                      "mc_moves": 0, "trap_stiffness_pN_nm": 20000.0,
+                      "integrator": "euler"},
             "grid": {"alpha": [0.0, 12.0], "seed": [1, 2, 3, 4, 5, 6]}}
     res = sweep.run_sweep(spec, out=str(tmp_path / "sweep"), workers=2)
     pts = {}
