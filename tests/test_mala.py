@@ -27,17 +27,29 @@ Z = 4.0
 Z_CONTROL = 6.0
 
 
-def quartic_system(n, a):
-    """n particles in the well U = a (x^4 + y^4 + z^4) (kJ/mol, nm)."""
+def well_system(n, expr, **params):
+    """n particles of mass MASS in the external well ``expr`` (x, y, z in nm, kJ/mol) with
+    the given global parameters."""
     s = openmm.System()
     for _ in range(n):
         s.addParticle(MASS)
-    f = openmm.CustomExternalForce("a*(x^4 + y^4 + z^4)")
-    f.addGlobalParameter("a", a)
+    f = openmm.CustomExternalForce(expr)
+    for k, v in params.items():
+        f.addGlobalParameter(k, v)
     for i in range(n):
         f.addParticle(i, [])
     s.addForce(f)
     return s
+
+
+def quartic_system(n, a):
+    """n particles in the well U = a (x^4 + y^4 + z^4)."""
+    return well_system(n, "a*(x^4 + y^4 + z^4)", a=a)
+
+
+def harmonic_system(n, k):
+    """n particles in the well U = k r^2 / 2."""
+    return well_system(n, "0.5*k*(x^2 + y^2 + z^2)", k=k)
 
 
 def blocked_mean_se(x, blocks=40):
@@ -58,16 +70,7 @@ def logcosh_system(n, c, w):
     """n particles in U = c (ln cosh(x / w) + ln cosh(y / w) + ln cosh(z / w)): harmonic
     (curvature c / w^2) near 0, linear beyond w; the force is bounded, so Euler-Maruyama
     stays stable at any step and its bias can be measured."""
-    s = openmm.System()
-    for _ in range(n):
-        s.addParticle(MASS)
-    f = openmm.CustomExternalForce("c*(log(cosh(x/w)) + log(cosh(y/w)) + log(cosh(z/w)))")
-    f.addGlobalParameter("c", c)
-    f.addGlobalParameter("w", w)
-    for i in range(n):
-        f.addParticle(i, [])
-    s.addForce(f)
-    return s
+    return well_system(n, "c*(log(cosh(x/w)) + log(cosh(y/w)) + log(cosh(z/w)))", c=c, w=w)
 
 
 def boltzmann_x2(u):
@@ -124,12 +127,7 @@ def test_mala_harmonic_variance_exact_at_euler_maruyamas_inflation():
     """One particle in a harmonic well at h = dt mu k = 1.5: Euler-Maruyama's variance is
     inflated by 1 / (1 - h / 2) = 4 (exact for this scheme); MALA's is kT / k."""
     k = 1000.0
-    s = openmm.System()
-    s.addParticle(MASS)
-    f = openmm.CustomExternalForce("0.5*k*(x^2 + y^2 + z^2)")
-    f.addGlobalParameter("k", k)
-    f.addParticle(0, [])
-    s.addForce(f)
+    s = harmonic_system(1, k)
     dt = 1.5 / (MOB * k)
     start = np.zeros((1, 3)) + math.sqrt(KT / k)
     x2, _ = sample_x2(s, start, dt, "mala", 8000, 5)
@@ -145,13 +143,7 @@ def test_proposals_with_non_finite_energy_are_rejected():
     that makes many proposals leave it, MALA never accepts one (step(NaN) = 0) and its
     <x^2> is the Boltzmann value; Euler-Maruyama would leave and go NaN."""
     w, c = 1.0, 5.0 * KT
-    s = openmm.System()
-    s.addParticle(MASS)
-    f = openmm.CustomExternalForce("-c*(log(1 - (x/w)^2) + log(1 - (y/w)^2) + log(1 - (z/w)^2))")
-    f.addGlobalParameter("c", c)
-    f.addGlobalParameter("w", w)
-    f.addParticle(0, [])
-    s.addForce(f)
+    s = well_system(1, "-c*(log(1 - (x/w)^2) + log(1 - (y/w)^2) + log(1 - (z/w)^2))", c=c, w=w)
     dt = 0.3 * w * w / (MOB * KT)  # proposals' spread ~ 0.8 w
     x2, eng = sample_x2(s, np.zeros((1, 3)), dt, "mala", 6000, 5)
     assert np.all(np.isfinite(x2)) and np.all(x2 < w * w)
@@ -168,12 +160,7 @@ def test_energy_is_recomputed_after_outside_changes():
     """Positions set straight on the Context (as a Metropolis move might) and a parameter
     set through the engine: the next step's current energy E0 is the new state's."""
     k = 1000.0
-    s = openmm.System()
-    s.addParticle(MASS)
-    f = openmm.CustomExternalForce("0.5*k*(x^2 + y^2 + z^2)")
-    f.addGlobalParameter("k", k)
-    f.addParticle(0, [])
-    s.addForce(f)
+    s = harmonic_system(1, k)
     # a step so small that a proposal is the current state to 1e-5 of its energy: E0
     # (kept, or the accepted proposal's E1) must then be the state's energy
     eng = Engine(s, np.zeros((1, 3)), IntegratorSettings(T_K, 1e-14, "mala"),

@@ -31,22 +31,8 @@ import numpy as np
 HERE = pathlib.Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE.parent / "tests"))
 
-from test_mala import (KT, MOB, blocked_mean_se, boltzmann_x2, logcosh_system,  # noqa: E402
-                       quartic_system, sample_x2)
-
-
-def harmonic_system(n, k):
-    import openmm
-
-    s = openmm.System()
-    for _ in range(n):
-        s.addParticle(1.0 / MOB)
-    f = openmm.CustomExternalForce("0.5*k*(x^2 + y^2 + z^2)")
-    f.addGlobalParameter("k", k)
-    for i in range(n):
-        f.addParticle(i, [])
-    s.addForce(f)
-    return s
+from test_mala import (KT, MOB, blocked_mean_se, boltzmann_x2,  # noqa: E402
+                       harmonic_system, logcosh_system, quartic_system, sample_x2)
 
 
 def wells():
